@@ -1,0 +1,45 @@
+#pragma once
+// What every subcommand shares: error reporting with exit codes, the ../shared location, progress
+// output and Ctrl-C handling. Lives in the app, never in the libraries.
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <string>
+
+namespace ddl::app {
+
+/// Exit codes: 0 success, 1 failure while working, 2 bad input or configuration, 130 interrupted.
+enum ExitCode : int { kOk = 0, kFailure = 1, kBadInput = 2, kInterrupted = 130 };
+
+/// Runs a subcommand body, turning library exceptions into a one-line "error: ..." on stderr and
+/// the matching exit code. Never lets an exception escape to terminate().
+int run_guarded(const std::function<int()>& body);
+
+/// The shared data folder: the flag value if given, else $DDL_SHARED_DIR, else ../shared.
+std::string resolve_shared_dir(const std::string& flag_value);
+
+/// Installs SIGINT/SIGTERM handlers that set the returned flag (first signal) so long work stops
+/// cleanly and flushes its outputs; a second signal exits at once.
+const std::atomic<bool>& install_stop_handler();
+
+/// Progress on stderr: a redrawn bar on a terminal, otherwise a plain line every few seconds.
+class Progress {
+ public:
+  Progress(std::string label, std::size_t total);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  void update(std::size_t done, const std::string& note = {});
+  void finish(const std::string& note = {});
+
+ private:
+  std::string label_;
+  std::size_t total_;
+  bool tty_;
+  bool finished_ = false;
+  double start_s_;
+  double last_print_s_ = -1e9;
+};
+
+}  // namespace ddl::app

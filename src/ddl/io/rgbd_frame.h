@@ -1,0 +1,21 @@
+#pragma once
+// One RGB-D observation as the pipeline consumes it: undistorted colour and metric depth,
+// registered to the colour camera.
+
+#include <opencv2/core.hpp>
+
+#include <cstddef>
+#include <string>
+
+namespace ddl::io {
+
+struct RgbdFrame {
+  std::size_t index = 0;   // position in the sequence, 0-based
+  double timestamp_s = 0;  // RGB timestamp, seconds (TUM: Unix time)
+  cv::Mat rgb;             // CV_8UC3, BGR, undistorted
+  cv::Mat depth_m;         // CV_32FC1, metres along the optical axis, 0 = no measurement
+  std::string rgb_path;    // source files, for messages and outputs
+  std::string depth_path;
+};
+
+}  // namespace ddl::io
