@@ -1,0 +1,88 @@
+#include "ddl/map/map.h"
+
+namespace ddl::map {
+
+void Map::add_keyframe(const KeyFramePtr& keyframe) {
+  std::lock_guard lock(index_mutex_);
+  keyframes_[keyframe->id()] = keyframe;
+}
+
+void Map::add_map_point(const MapPointPtr& point) {
+  std::lock_guard lock(index_mutex_);
+  points_[point->id()] = point;
+}
+
+void Map::erase_keyframe(KeyFrameId id) {
+  std::lock_guard lock(index_mutex_);
+  keyframes_.erase(id);
+}
+
+void Map::erase_map_point(MapPointId id) {
+  std::lock_guard lock(index_mutex_);
+  points_.erase(id);
+}
+
+std::vector<KeyFramePtr> Map::keyframes() const {
+  std::vector<KeyFramePtr> all;
+  {
+    std::lock_guard lock(index_mutex_);
+    all.reserve(keyframes_.size());
+    for (const auto& [id, kf] : keyframes_) all.push_back(kf);
+  }
+  std::erase_if(all, [](const KeyFramePtr& kf) { return kf->is_bad(); });
+  return all;
+}
+
+std::vector<MapPointPtr> Map::map_points() const {
+  std::vector<MapPointPtr> all;
+  {
+    std::lock_guard lock(index_mutex_);
+    all.reserve(points_.size());
+    for (const auto& [id, p] : points_) all.push_back(p);
+  }
+  std::erase_if(all, [](const MapPointPtr& p) { return p->is_bad(); });
+  return all;
+}
+
+KeyFramePtr Map::keyframe(KeyFrameId id) const {
+  std::lock_guard lock(index_mutex_);
+  auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second;
+}
+
+std::size_t Map::keyframe_count() const {
+  std::lock_guard lock(index_mutex_);
+  return keyframes_.size();
+}
+
+std::size_t Map::map_point_count() const {
+  std::lock_guard lock(index_mutex_);
+  return points_.size();
+}
+
+KeyFramePtr Map::first_keyframe() const {
+  std::lock_guard lock(index_mutex_);
+  return keyframes_.empty() ? nullptr : keyframes_.begin()->second;
+}
+
+void Map::apply_update(const std::function<void()>& f) {
+  std::unique_lock lock(update_mutex_);
+  f();
+}
+
+void Map::read_consistent(const std::function<void()>& f) const {
+  std::shared_lock lock(update_mutex_);
+  f();
+}
+
+void Map::clear() {
+  std::lock_guard lock(index_mutex_);
+  // Break KeyFrame -> MapPoint ownership so nothing outlives the map.
+  for (auto& [id, kf] : keyframes_) {
+    for (std::size_t i = 0; i < kf->features().size(); ++i) kf->erase_map_point(i);
+  }
+  keyframes_.clear();
+  points_.clear();
+}
+
+}  // namespace ddl::map

@@ -1,0 +1,71 @@
+#pragma once
+// The map: owns every keyframe and map point (ARCHITECTURE.md section 3: the only shared mutable
+// state). Entities lock inside their own methods; the Map's own index is guarded by its mutex.
+// Ids come from per-map counters (no global state).
+//
+// Consistency across several calls: tracking reads poses and points while local mapping and loop
+// closing change them. Writers that move many entities at once (local BA write-back, loop
+// correction) run inside `apply_update(f)`, and readers that need a consistent view of several
+// entities run inside `read_consistent(f)`; both take the map's update lock around f, so a
+// reader never sees half a correction. The lock itself is never exposed.
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <vector>
+
+#include "ddl/map/keyframe.h"
+#include "ddl/map/map_point.h"
+
+namespace ddl::map {
+
+class Map {
+ public:
+  Map() = default;
+  Map(const Map&) = delete;
+  Map& operator=(const Map&) = delete;
+
+  KeyFrameId next_keyframe_id() { return next_keyframe_id_.fetch_add(1); }
+  MapPointId next_map_point_id() { return next_map_point_id_.fetch_add(1); }
+
+  void add_keyframe(const KeyFramePtr& keyframe);
+  void add_map_point(const MapPointPtr& point);
+  /// Removes from the index (call after KeyFrame::set_bad / MapPoint::set_bad).
+  void erase_keyframe(KeyFrameId id);
+  void erase_map_point(MapPointId id);
+
+  /// Live keyframes / points sorted by id (bad ones are skipped).
+  std::vector<KeyFramePtr> keyframes() const;
+  std::vector<MapPointPtr> map_points() const;
+  KeyFramePtr keyframe(KeyFrameId id) const;
+  std::size_t keyframe_count() const;
+  std::size_t map_point_count() const;
+  KeyFramePtr first_keyframe() const;
+
+  /// Runs f under the exclusive update lock (writers moving many entities).
+  void apply_update(const std::function<void()>& f);
+  /// Runs f under the shared update lock (readers needing a consistent multi-entity view).
+  void read_consistent(const std::function<void()>& f) const;
+
+  /// Incremented after every loop correction or global BA write-back, so that other stages
+  /// (dense map, inpainting caches) know that keyframe poses moved.
+  int big_change_index() const { return big_change_index_.load(); }
+  void notify_big_change() { big_change_index_.fetch_add(1); }
+
+  /// Drops everything (e.g. a reset after tracking failure at start-up).
+  void clear();
+
+ private:
+  std::atomic<KeyFrameId> next_keyframe_id_{0};
+  std::atomic<MapPointId> next_map_point_id_{0};
+  std::atomic<int> big_change_index_{0};
+  mutable std::mutex index_mutex_;
+  std::map<KeyFrameId, KeyFramePtr> keyframes_;
+  std::map<MapPointId, MapPointPtr> points_;
+  mutable std::shared_mutex update_mutex_;
+};
+
+}  // namespace ddl::map
