@@ -1,0 +1,153 @@
+#include "ddl/pipeline/sequence_runner.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "ddl/core/error.h"
+#include "ddl/eval/evaluate.h"
+#include "ddl/eval/plot.h"
+#include "ddl/eval/report.h"
+
+namespace ddl::pipeline {
+namespace fs = std::filesystem;
+
+nlohmann::json timings_to_json(const TimingStats& timings) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [stage, s] : timings.summary()) {
+    out[stage] = {{"count", s.count},
+                  {"median_ms", s.median_ms},
+                  {"mean_ms", s.mean_ms},
+                  {"p90_ms", s.p90_ms},
+                  {"max_ms", s.max_ms}};
+  }
+  return out;
+}
+
+namespace {
+
+void write_json(const fs::path& path, const nlohmann::json& json) {
+  std::ofstream file(path);
+  if (!file) throw InputError::at(path.string(), "cannot open for writing");
+  file << json.dump(2) << '\n';
+}
+
+nlohmann::json statistics_to_json(const SystemStatistics& s) {
+  return {{"frames", s.frames},
+          {"frames_tracked", s.frames_tracked},
+          {"frames_lost", s.frames_lost},
+          {"relocalizations", s.relocalizations},
+          {"keyframes_created", s.keyframes_created},
+          {"keyframes", s.keyframes},
+          {"map_points", s.map_points},
+          {"loops_closed", s.loops_closed}};
+}
+
+}  // namespace
+
+RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const RunOptions& options,
+                        const std::atomic<bool>* stop, const ProgressFn& progress) {
+  const fs::path out_dir(options.output_dir);
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
+
+  const std::size_t begin = std::min(options.first_frame, dataset.size());
+  std::size_t end = dataset.size();
+  if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
+  const std::size_t total = end - begin;
+
+  RunOutcome outcome;
+  std::exception_ptr error;
+  Stopwatch wall;
+  std::size_t done = 0;
+  try {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (stop != nullptr && stop->load()) {
+        outcome.interrupted = true;
+        break;
+      }
+      Stopwatch load_watch;
+      const io::RgbdFrame frame = dataset.frame(i);
+      const double load_ms = load_watch.elapsed_ms();
+      const tracking::TrackingResult result = system.process(frame);
+      ++done;
+      if (progress) {
+        progress(done, total,
+                 fmt::format("{} kf, {}", system.statistics().keyframes_created,
+                             tracking::to_string(result.state)));
+      }
+      (void)load_ms;
+    }
+    system.finish();
+  } catch (...) {
+    error = std::current_exception();
+    try {
+      system.finish();
+    } catch (...) {
+      spdlog::error("a second error occurred while shutting down after the first");
+    }
+  }
+  const double wall_s = wall.elapsed_ms() / 1000.0;
+
+  // Outputs first, so that nothing computed is lost, then the error (if any) propagates.
+  const fs::path camera_path = out_dir / "CameraTrajectory.txt";
+  const fs::path keyframe_path = out_dir / "KeyFrameTrajectory.txt";
+  io::write_tum_trajectory(camera_path.string(), system.camera_trajectory(),
+                           "DDL-SLAM camera trajectory (T_w_c) of " + dataset.name());
+  io::write_tum_trajectory(keyframe_path.string(), system.keyframe_trajectory(),
+                           "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
+
+  outcome.statistics = system.statistics();
+  nlohmann::json& summary = outcome.summary;
+  summary["sequence"] = dataset.name();
+  summary["frames_in_sequence"] = dataset.size();
+  summary["frames_processed"] = done;
+  summary["interrupted"] = outcome.interrupted;
+  summary["failed"] = error != nullptr;
+  summary["wall_time_s"] = wall_s;
+  summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
+  summary["statistics"] = statistics_to_json(outcome.statistics);
+  summary["timing_ms"] = timings_to_json(system.timings());
+  summary["outputs"] = {{"camera_trajectory", camera_path.filename().string()},
+                        {"keyframe_trajectory", keyframe_path.filename().string()}};
+
+  const auto gt = dataset.groundtruth_path();
+  if (options.evaluate && gt && error == nullptr && outcome.statistics.frames_tracked >= 2) {
+    try {
+      const eval::EvalResult result =
+          eval::evaluate(io::read_tum_trajectory(*gt), system.camera_trajectory(), {}, *gt,
+                         camera_path.string());
+      const fs::path eval_dir = out_dir / "eval";
+      fs::create_directories(eval_dir, ec);
+      eval::write_json_report((eval_dir / "eval.json").string(), result);
+      eval::write_eval_plots(result, eval_dir.string());
+      nlohmann::json ev = eval::to_json(result);
+      // Tracked ratio against the frames that were processed.
+      std::size_t inside = 0;
+      const double gt_begin = result.groundtruth.front().timestamp_s;
+      const double gt_end = result.groundtruth.back().timestamp_s;
+      for (std::size_t i = begin; i < begin + done; ++i) {
+        const double t = dataset.timestamp(i);
+        if (t >= gt_begin && t <= gt_end) ++inside;
+      }
+      ev["tracked_ratio"] =
+          inside > 0 ? static_cast<double>(result.estimate.size()) / static_cast<double>(inside)
+                     : 0.0;
+      summary["evaluation"] = ev;
+      spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
+                   result.ate.stats_m.rmse, result.ate.errors_m.size(),
+                   result.rpe.trans_m.rmse, result.rpe.rot_deg.rmse);
+    } catch (const Error& e) {
+      spdlog::warn("evaluation skipped: {}", e.what());
+      summary["evaluation_error"] = e.what();
+    }
+  }
+  write_json(out_dir / "summary.json", summary);
+  if (error) std::rethrow_exception(error);
+  return outcome;
+}
+
+}  // namespace ddl::pipeline

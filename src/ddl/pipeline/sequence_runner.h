@@ -1,0 +1,44 @@
+#pragma once
+// Runs the System over a whole dataset and writes every output of a run into one folder:
+//   CameraTrajectory.txt    TUM format, T_w_c of every tracked frame
+//   KeyFrameTrajectory.txt  TUM format, T_w_c of every keyframe at the end of the run
+//   summary.json            counters, per-stage timing medians, evaluation (when ground truth)
+//   config.yaml             the effective configuration (written by the caller, see apps)
+//   eval/                   ATE/RPE JSON and plots when the dataset has ground truth
+// Outputs are written also when the run stops early (Ctrl-C through `stop`, or an error in a
+// frame): the trajectory so far is flushed before the error propagates.
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "ddl/io/dataset_reader.h"
+#include "ddl/pipeline/system.h"
+
+namespace ddl::pipeline {
+
+struct RunOptions {
+  std::string output_dir = "out/run";  // created if missing
+  std::size_t first_frame = 0;         // skip frames before this index
+  std::size_t max_frames = 0;          // 0 = all frames
+  bool evaluate = true;                // evaluate against ground truth when the dataset has it
+};
+
+struct RunOutcome {
+  bool interrupted = false;
+  SystemStatistics statistics;
+  nlohmann::json summary;  // what summary.json holds
+};
+
+/// `progress(done, total, note)` is called after every frame from the calling thread.
+using ProgressFn = std::function<void(std::size_t, std::size_t, const std::string&)>;
+
+RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const RunOptions& options,
+                        const std::atomic<bool>* stop = nullptr, const ProgressFn& progress = {});
+
+/// Timing summary as JSON: {stage: {count, median_ms, mean_ms, p90_ms, max_ms}}.
+nlohmann::json timings_to_json(const TimingStats& timings);
+
+}  // namespace ddl::pipeline

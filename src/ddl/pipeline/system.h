@@ -1,0 +1,107 @@
+#pragma once
+// System: the only public entry point of the SLAM library. Wires the stages of ARCHITECTURE.md
+// section 3 — tracking -> local mapping -> loop closing — and owns their threads.
+//
+// Modes (SystemConfig::mode):
+//   kDeterministic: every stage runs inline in the caller's thread, in order: the frame is
+//     tracked; a new keyframe is processed completely by local mapping (its BA never aborted)
+//     and then by loop closing (global BA inline). Same input and settings give the same
+//     trajectory. Used by tests and evaluation.
+//   kThreaded: tracking runs in the caller's thread; local mapping and loop closing each run in a
+//     worker thread fed through a bounded queue; global BA runs in the loop closer's background
+//     thread. A new keyframe raises the abort flag of a running local BA (ORB-SLAM2's
+//     InterruptBA). Shutdown: finish() closes the queues, drains them and joins every thread.
+// A worker that throws stores the exception; the next process()/finish() call rethrows it after
+// shutting the other stages down, and the trajectory so far stays available.
+//
+// Thread-safety: process(), finish() and the accessors must be called from one thread.
+
+#include <atomic>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "ddl/camera/pinhole_camera.h"
+#include "ddl/core/bounded_queue.h"
+#include "ddl/core/timing.h"
+#include "ddl/io/rgbd_frame.h"
+#include "ddl/io/trajectory_io.h"
+#include "ddl/loop/loop_closer.h"
+#include "ddl/map/map.h"
+#include "ddl/mapping/local_mapper.h"
+#include "ddl/pipeline/system_config.h"
+#include "ddl/tracking/tracker.h"
+#include "ddl/vocabulary/bow_database.h"
+#include "ddl/vocabulary/vocabulary.h"
+
+namespace ddl::pipeline {
+
+/// Counters for the run summary.
+struct SystemStatistics {
+  std::size_t frames = 0;
+  std::size_t frames_tracked = 0;
+  std::size_t frames_lost = 0;
+  std::size_t relocalizations = 0;
+  std::size_t keyframes_created = 0;
+  std::size_t keyframes = 0;   // alive in the map at the end
+  std::size_t map_points = 0;  // alive in the map at the end
+  std::size_t loops_closed = 0;
+};
+
+class System {
+ public:
+  System(const SystemConfig& config, const camera::PinholeCamera& camera,
+         std::shared_ptr<const vocabulary::Vocabulary> vocabulary);
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  /// Tracks one frame (frames in timestamp order). `dynamic_mask` (CV_8UC1, non-zero = pixel to
+  /// ignore) may be empty.
+  tracking::TrackingResult process(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask = {});
+
+  /// Ends the run: drains the queues, joins the workers, waits for a running global BA.
+  /// Rethrows a worker's exception. Idempotent.
+  void finish();
+
+  io::Trajectory camera_trajectory() const;
+  io::Trajectory keyframe_trajectory() const;
+  SystemStatistics statistics() const;
+  const TimingStats& timings() const { return timings_; }
+  std::shared_ptr<const map::Map> map() const { return map_; }
+
+ private:
+  void mapping_worker();
+  void loop_worker();
+  void handle_keyframe_inline(const map::KeyFramePtr& keyframe);
+  void rethrow_worker_error();
+  void store_error(std::exception_ptr error);
+  void shutdown_workers();
+
+  SystemConfig config_;
+  camera::PinholeCamera camera_;
+  std::shared_ptr<const vocabulary::Vocabulary> vocabulary_;
+  std::shared_ptr<vocabulary::BowDatabase> database_;
+  std::shared_ptr<map::Map> map_;
+  std::unique_ptr<tracking::Tracker> tracker_;
+  std::unique_ptr<mapping::LocalMapper> mapper_;
+  std::unique_ptr<loop::LoopCloser> loop_closer_;
+  TimingStats timings_;
+  SystemStatistics stats_;
+
+  // Threaded mode only.
+  std::unique_ptr<BoundedQueue<map::KeyFramePtr>> mapping_queue_;
+  std::unique_ptr<BoundedQueue<map::KeyFramePtr>> loop_queue_;
+  std::atomic<bool> abort_local_ba_{false};
+  std::atomic<bool> mapper_busy_{false};
+  std::thread mapping_thread_;
+  std::thread loop_thread_;
+  std::mutex error_mutex_;
+  std::exception_ptr worker_error_;
+  std::atomic<bool> failed_{false};
+  bool finished_ = false;
+};
+
+}  // namespace ddl::pipeline
