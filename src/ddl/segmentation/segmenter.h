@@ -1,0 +1,69 @@
+#pragma once
+// Pixel-wise semantic segmentation of a-priori dynamic classes (DDL-SLAM section III-B).
+// A Segmenter turns a BGR frame into a label image and a dynamic mask (255 where a pixel belongs
+// to one of the configured dynamic classes). Backends: OpenCV dnn running an ONNX model
+// (ESPNetv2 trained on PASCAL VOC by default), masks precomputed in a folder, and none.
+// Thread-safety: segment() may be called from one thread at a time per instance (cv::dnn nets
+// keep state); create one instance per thread.
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace ddl::segmentation {
+
+/// PASCAL VOC class names, index = label (0 background ... 20 tvmonitor).
+const std::vector<std::string>& voc_class_names();
+/// The paper's a-priori dynamic VOC classes: aeroplane, bicycle, bird, boat, bus, car, cat, cow,
+/// dog, horse, motorbike, person, sheep, train.
+std::vector<std::string> default_dynamic_classes();
+
+enum class Backend {
+  kOnnx,    // OpenCV dnn + ONNX model file
+  kFolder,  // precomputed masks: <folder>/<rgb file stem>.png, non-zero = dynamic
+  kNone,    // no segmentation (empty masks)
+};
+
+struct SegmenterConfig {
+  Backend backend = Backend::kOnnx;
+  /// ONNX model; {W}x{H} in the name is not interpreted: input_width/height must match the model.
+  std::string model_path = "models/espnetv2_s2.0_voc_512x384.onnx";  // relative to the shared dir
+  int input_width = 512;  // network input size in pixels (the ONNX files have fixed sizes)
+  int input_height = 384;
+  std::vector<std::string> class_names = voc_class_names();  // label index -> name
+  std::vector<std::string> dynamic_classes = default_dynamic_classes();
+  int num_threads = 1;      // OpenCV dnn threads (cv::setNumThreads is process-wide: see docs)
+  std::string mask_folder;  // kFolder: where the precomputed masks are
+  int dilation_px = 0;      // grow the mask by this many pixels after upsampling
+
+  /// Throws ddl::ConfigError naming the key ("segmentation.<field>").
+  void validate() const;
+};
+
+struct SegmentationResult {
+  cv::Mat labels;        // CV_8UC1 class index per pixel (empty for kFolder/kNone)
+  cv::Mat dynamic_mask;  // CV_8UC1, 255 = dynamic class, same size as the input image
+  double inference_ms = 0.0;
+};
+
+class Segmenter {
+ public:
+  virtual ~Segmenter() = default;
+  /// `bgr`: CV_8UC3. `source_path`: the frame's RGB file (used by the folder backend).
+  virtual SegmentationResult segment(const cv::Mat& bgr, const std::string& source_path) = 0;
+  virtual std::string description() const = 0;
+};
+
+/// Creates the configured backend. For kOnnx, `model_path` is resolved against `shared_dir` when
+/// relative. A missing model file throws ddl::InputError naming it (the caller decides whether to
+/// fall back to geometry-only operation, with a warning); an invalid model file throws
+/// ddl::InputError naming the file and OpenCV's reason.
+std::unique_ptr<Segmenter> make_segmenter(const SegmenterConfig& config,
+                                          const std::string& shared_dir);
+
+/// Label image -> mask of the labels in `dynamic_labels` (255) at the label image's size.
+cv::Mat mask_from_labels(const cv::Mat& labels, const std::set<int>& dynamic_labels);
+
+}  // namespace ddl::segmentation

@@ -1,0 +1,113 @@
+#include "ddl/segmentation/segmenter.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "ddl/core/error.h"
+
+namespace ddl::segmentation {
+namespace {
+namespace fs = std::filesystem;
+
+std::string shared_dir() {
+  const char* env = std::getenv("DDL_SHARED_DIR");
+  return env != nullptr && *env != '\0' ? env : DDL_DEFAULT_SHARED_DIR;
+}
+
+constexpr char kBasketball[] = "/usr/share/doc/opencv-doc/examples/data/basketball1.png";
+
+TEST(Segmenter, OnnxFindsThePeopleInBasketballPhoto) {
+  const fs::path model = fs::path(shared_dir()) / "models/espnetv2_s2.0_voc_512x384.onnx";
+  if (!fs::exists(model)) GTEST_SKIP() << "model not found: " << model;
+  if (!fs::exists(kBasketball)) GTEST_SKIP() << "opencv-doc not installed: " << kBasketball;
+  SegmenterConfig config;
+  auto segmenter = make_segmenter(config, shared_dir());
+  const cv::Mat bgr = cv::imread(kBasketball, cv::IMREAD_COLOR);
+  ASSERT_FALSE(bgr.empty());
+  const SegmentationResult result = segmenter->segment(bgr, kBasketball);
+  ASSERT_EQ(result.dynamic_mask.size(), bgr.size());
+  ASSERT_EQ(result.labels.size(), bgr.size());
+  // The photo shows two basketball players indoors: a real share of the image is person, and
+  // the person label dominates the dynamic mask.
+  const double dynamic_fraction =
+      cv::countNonZero(result.dynamic_mask) / static_cast<double>(bgr.total());
+  EXPECT_GT(dynamic_fraction, 0.05);
+  EXPECT_LT(dynamic_fraction, 0.8);
+  const int person = 15;
+  const cv::Mat person_mask = result.labels == person;
+  EXPECT_GT(cv::countNonZero(person_mask), 0.9 * cv::countNonZero(result.dynamic_mask));
+  // The top rows of the photo (the gym's wall) are not person.
+  const cv::Mat top = result.dynamic_mask.rowRange(0, 20);
+  EXPECT_LT(cv::countNonZero(top), 0.2 * static_cast<double>(top.total()));
+}
+
+TEST(Segmenter, MissingModelIsAClearError) {
+  SegmenterConfig config;
+  config.model_path = "/nonexistent/model.onnx";
+  try {
+    make_segmenter(config, shared_dir());
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/model.onnx"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos);
+  }
+}
+
+TEST(Segmenter, InvalidModelFileIsAClearError) {
+  const fs::path bad = fs::temp_directory_path() / "ddl_invalid_model.onnx";
+  std::ofstream(bad) << "this is not a protobuf";
+  SegmenterConfig config;
+  config.model_path = bad.string();
+  try {
+    make_segmenter(config, shared_dir());
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("ONNX"), std::string::npos);
+  }
+  fs::remove(bad);
+}
+
+TEST(Segmenter, UnknownDynamicClassNamesTheKey) {
+  SegmenterConfig config;
+  config.dynamic_classes = {"person", "unicorn"};
+  try {
+    config.validate();
+    FAIL() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("segmentation.dynamic_classes"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("unicorn"), std::string::npos);
+  }
+}
+
+TEST(Segmenter, FolderBackendReadsMasksByFrameName) {
+  const fs::path dir = fs::temp_directory_path() / "ddl_mask_folder";
+  fs::create_directories(dir);
+  cv::Mat mask = cv::Mat::zeros(40, 60, CV_8UC1);
+  mask(cv::Rect(10, 5, 20, 10)).setTo(255);
+  cv::imwrite((dir / "1305031102.175304.png").string(), mask);
+  SegmenterConfig config;
+  config.backend = Backend::kFolder;
+  config.mask_folder = dir.string();
+  auto segmenter = make_segmenter(config, "");
+  const cv::Mat bgr(40, 60, CV_8UC3, cv::Scalar(0, 0, 0));
+  const auto result = segmenter->segment(bgr, "rgb/1305031102.175304.png");
+  EXPECT_EQ(cv::countNonZero(result.dynamic_mask), 200);
+  EXPECT_THROW(segmenter->segment(bgr, "rgb/missing.png"), InputError);
+  fs::remove_all(dir);
+}
+
+TEST(Segmenter, MaskFromLabels) {
+  cv::Mat labels = (cv::Mat_<std::uint8_t>(1, 4) << 0, 15, 9, 15);
+  const cv::Mat mask = mask_from_labels(labels, {15});
+  EXPECT_EQ(mask.at<std::uint8_t>(0, 1), 255);
+  EXPECT_EQ(mask.at<std::uint8_t>(0, 2), 0);
+  EXPECT_EQ(cv::countNonZero(mask), 2);
+}
+
+}  // namespace
+}  // namespace ddl::segmentation
