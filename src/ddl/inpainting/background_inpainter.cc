@@ -1,0 +1,129 @@
+#include "ddl/inpainting/background_inpainter.h"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
+
+#include "ddl/core/error.h"
+
+namespace ddl::inpainting {
+
+void InpaintingConfig::validate() const {
+  auto fail = [](const char* key, const char* what) {
+    throw ConfigError::for_key(std::string("inpainting.") + key, what);
+  };
+  if (num_keyframes < 1) fail("num_keyframes", "must be >= 1");
+  if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");
+  if (!(depth_tolerance_m >= 0)) fail("depth_tolerance_m", "must be >= 0");
+  if (!(max_depth_m > 0)) fail("max_depth_m", "must be > 0");
+  if (max_hole_area_px < 0) fail("max_hole_area_px", "must be >= 0");
+  if (source_stride_px < 1) fail("source_stride_px", "must be >= 1");
+}
+
+InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
+                         const SE3& T_c_w, const std::vector<SourceView>& sources,
+                         const camera::PinholeCamera& camera, const InpaintingConfig& config) {
+  if (bgr.type() != CV_8UC3 || depth_m.type() != CV_32FC1 || mask.type() != CV_8UC1 ||
+      bgr.size() != depth_m.size() || bgr.size() != mask.size()) {
+    throw Error("inpaint: expects CV_8UC3 colour, CV_32FC1 depth and CV_8UC1 mask of one size");
+  }
+  InpaintingResult out;
+  out.bgr = bgr.clone();
+  out.depth_m = depth_m.clone();
+  out.filled = cv::Mat::zeros(mask.size(), CV_8UC1);
+  out.image_filled = cv::Mat::zeros(mask.size(), CV_8UC1);
+  out.masked_pixels = cv::countNonZero(mask);
+  if (out.masked_pixels == 0) {
+    out.unfilled = out.filled.clone();
+    return out;
+  }
+  // z-buffer over the masked pixels only; +inf = nothing yet.
+  cv::Mat zbuf(mask.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+  const int w = mask.cols;
+  const int h = mask.rows;
+  const int r = config.splat_radius_px;
+  const float tol = static_cast<float>(config.depth_tolerance_m);
+  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+
+  const std::size_t count =
+      std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
+  for (std::size_t s = 0; s < count; ++s) {
+    const SourceView& src = sources[s];
+    const SE3 T_cur_src = T_c_w * src.T_w_c;
+    const Mat3d R = T_cur_src.rotation();
+    const Vec3d t = T_cur_src.translation();
+    for (int v = 0; v < src.depth_m.rows; v += config.source_stride_px) {
+      const float* drow = src.depth_m.ptr<float>(v);
+      const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
+      const std::uint8_t* xrow = src.exclude_mask.empty() ? nullptr : src.exclude_mask.ptr(v);
+      for (int u = 0; u < src.depth_m.cols; u += config.source_stride_px) {
+        const float z = drow[u];
+        if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
+        const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
+        const Vec3d p = R * p_src + t;
+        if (p.z() <= 0.05) continue;
+        const double uc = fx * p.x() / p.z() + cx;
+        const double vc = fy * p.y() / p.z() + cy;
+        const int iu = static_cast<int>(std::lround(uc));
+        const int iv = static_cast<int>(std::lround(vc));
+        if (iu < -r || iv < -r || iu >= w + r || iv >= h + r) continue;
+        const float zc = static_cast<float>(p.z());
+        for (int dv = -r; dv <= r; ++dv) {
+          const int y = iv + dv;
+          if (y < 0 || y >= h) continue;
+          const std::uint8_t* mrow = mask.ptr(y);
+          float* zrow = zbuf.ptr<float>(y);
+          for (int du = -r; du <= r; ++du) {
+            const int x = iu + du;
+            if (x < 0 || x >= w || mrow[x] == 0) continue;
+            // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
+            if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
+                                       out.filled.at<std::uint8_t>(y, x) != 2)) {
+              zrow[x] = zc;
+              out.bgr.at<cv::Vec3b>(y, x) = crow[u];
+              out.depth_m.at<float>(y, x) = zc;
+              out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
+            }
+          }
+        }
+      }
+    }
+  }
+  out.filled = out.filled != 0;
+  out.filled_pixels = cv::countNonZero(out.filled);
+
+  cv::Mat unfilled;
+  cv::bitwise_and(mask != 0, out.filled == 0, unfilled);
+  // Pixels under the mask that no keyframe saw keep no depth: it would be the moving object's.
+  out.depth_m.setTo(0.0f, unfilled);
+  if (config.image_fill_small_holes && config.max_hole_area_px > 0 &&
+      cv::countNonZero(unfilled) > 0) {
+    cv::Mat labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(unfilled, labels, stats, centroids, 8);
+    cv::Mat small = cv::Mat::zeros(mask.size(), CV_8UC1);
+    for (int i = 1; i < n; ++i) {
+      if (stats.at<int>(i, cv::CC_STAT_AREA) <= config.max_hole_area_px)
+        small.setTo(255, labels == i);
+    }
+    if (cv::countNonZero(small) > 0) {
+      cv::Mat filled_bgr;
+      cv::inpaint(out.bgr, small, filled_bgr, 3, cv::INPAINT_TELEA);
+      filled_bgr.copyTo(out.bgr, small);
+      // Depth: nearest valid neighbour median through a small dilation of the known depth.
+      cv::Mat depth_fill = out.depth_m.clone();
+      for (int iter = 0; iter < 8 && cv::countNonZero(small & (depth_fill == 0)) > 0; ++iter) {
+        cv::Mat grown;
+        cv::dilate(depth_fill, grown, cv::Mat());  // max of neighbours: background-biased
+        const cv::Mat holes = small & (depth_fill == 0);
+        grown.copyTo(depth_fill, holes);
+      }
+      depth_fill.copyTo(out.depth_m, small);
+      out.image_filled = small;
+      unfilled.setTo(0, small);
+    }
+  }
+  out.unfilled = unfilled;
+  return out;
+}
+
+}  // namespace ddl::inpainting

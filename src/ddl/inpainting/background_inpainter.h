@@ -1,0 +1,59 @@
+#pragma once
+// Background inpainting from previous keyframes (DDL-SLAM section III-E): the pixels of the
+// current frame hidden by dynamic objects are filled with what the last N keyframes (default 15)
+// saw there. Every static pixel of a keyframe (outside its own dynamic mask, with depth) is
+// back-projected with its depth, moved into the current camera with the optimized poses and
+// splatted into the current frame; a z-buffer keeps the nearest surface, so the result is what
+// the camera would see if the dynamic objects were not there. Keyframes are visited newest first
+// and their already repaired content is used (each keyframe stores its repaired images), so the
+// background spreads over time. Pixels no keyframe saw remain in the `unfilled` mask; an optional
+// image-based fill (OpenCV Telea inpainting) closes holes smaller than `max_hole_area_px`.
+// Thread-safety: pure functions of their inputs.
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "ddl/camera/pinhole_camera.h"
+#include "ddl/core/se3.h"
+
+namespace ddl::inpainting {
+
+struct InpaintingConfig {
+  int num_keyframes = 15;              // last keyframes projected (paper: 15)
+  int splat_radius_px = 1;             // each source pixel covers (2r+1)^2 target pixels (0 = one)
+  double depth_tolerance_m = 0.02;     // z-buffer: nearer by more than this wins
+  double max_depth_m = 6.0;            // ignore source depth beyond this
+  bool image_fill_small_holes = true;  // Telea fill for holes left after projection
+  int max_hole_area_px = 400;          // only holes (connected components) up to this size
+  int source_stride_px = 1;            // sample every n-th source pixel (speed/quality trade-off)
+
+  /// Throws ddl::ConfigError naming "inpainting.<field>".
+  void validate() const;
+};
+
+/// A keyframe as a source of background: its pose, images and the pixels not to use.
+struct SourceView {
+  SE3 T_w_c;
+  cv::Mat bgr;      // CV_8UC3 (repaired, when available)
+  cv::Mat depth_m;  // CV_32FC1 metres (repaired, when available), 0 = none
+  cv::Mat
+      exclude_mask;  // CV_8UC1 non-zero = do not use (dynamic pixels left unfilled); may be empty
+};
+
+struct InpaintingResult {
+  cv::Mat bgr;           // repaired colour
+  cv::Mat depth_m;       // repaired depth (0 where nothing is known)
+  cv::Mat filled;        // CV_8UC1 255 = masked pixel filled from keyframes
+  cv::Mat image_filled;  // CV_8UC1 255 = masked pixel filled by the image-based fill
+  cv::Mat unfilled;      // CV_8UC1 255 = masked pixel still unknown
+  int masked_pixels = 0;
+  int filled_pixels = 0;
+};
+
+/// Repairs the pixels of `mask` (non-zero) in the current frame (pose T_c_w) from `sources`
+/// (ordered newest first; at most config.num_keyframes are used).
+InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
+                         const SE3& T_c_w, const std::vector<SourceView>& sources,
+                         const camera::PinholeCamera& camera, const InpaintingConfig& config);
+
+}  // namespace ddl::inpainting

@@ -1,0 +1,143 @@
+#include "ddl/inpainting/background_inpainter.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "ddl/core/error.h"
+
+namespace ddl::inpainting {
+namespace {
+
+camera::PinholeCamera test_camera() {
+  camera::PinholeCamera c;
+  c.fx = 535.4;
+  c.fy = 539.2;
+  c.cx = 320.1;
+  c.cy = 247.6;
+  return c;
+}
+
+// Smooth colour texture on the wall plane z = 3 (world), a function of world x, y.
+cv::Vec3b wall_colour(double x, double y) {
+  auto ch = [](double a) { return static_cast<std::uint8_t>(127.5 + 120.0 * std::sin(a)); };
+  return {ch(4.0 * x + 1.0), ch(5.0 * y + 2.0), ch(3.0 * (x + y))};
+}
+
+struct View {
+  cv::Mat bgr, depth;
+};
+
+// Renders the wall and, optionally, a grey box (a "person") at z = 1.5 covering
+// x in [-0.3, 0.3], y in [-0.7, 0.7] (world).
+View render(const camera::PinholeCamera& cam, const SE3& T_w_c, bool with_person) {
+  View view{cv::Mat(cam.height, cam.width, CV_8UC3), cv::Mat(cam.height, cam.width, CV_32FC1)};
+  const Vec3d o = T_w_c.translation();
+  const SE3 T_c_w = T_w_c.inverse();
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const Vec3d dir = T_w_c.rotation() * cam.unproject(u, v, 1.0);
+      Vec3d hit = o + (3.0 - o.z()) / dir.z() * dir;
+      cv::Vec3b colour = wall_colour(hit.x(), hit.y());
+      if (with_person) {
+        const Vec3d p = o + (1.5 - o.z()) / dir.z() * dir;
+        if (std::abs(p.x()) <= 0.3 && std::abs(p.y()) <= 0.7) {
+          hit = p;
+          colour = {90, 90, 90};
+        }
+      }
+      view.bgr.at<cv::Vec3b>(v, u) = colour;
+      view.depth.at<float>(v, u) = static_cast<float>((T_c_w * hit).z());
+    }
+  }
+  return view;
+}
+
+double psnr_over(const cv::Mat& a, const cv::Mat& b, const cv::Mat& where) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  diff.convertTo(diff, CV_64FC3);
+  diff = diff.mul(diff);
+  const cv::Scalar sum = cv::sum(diff.setTo(0, where == 0));
+  const double n = 3.0 * cv::countNonZero(where);
+  const double mse = (sum[0] + sum[1] + sum[2]) / n;
+  return 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+TEST(Inpainting, FillsThePersonFromAnEarlierKeyframe) {
+  const auto cam = test_camera();
+  const SE3 T_w_kf(Mat3d(Eigen::AngleAxisd(0.05, Vec3d::UnitY())), Vec3d(0.4, 0.0, 0.0));
+  const SE3 T_w_cur(Mat3d::Identity(), Vec3d(0.0, 0.05, 0.1));
+  // The keyframe saw the wall with the person elsewhere (off to the right): its mask excludes it.
+  View kf = render(cam, T_w_kf, false);
+  View cur = render(cam, T_w_cur, true);
+  const View truth = render(cam, T_w_cur, false);
+  const cv::Mat mask = cur.depth < 2.0f;  // the person's pixels
+  ASSERT_GT(cv::countNonZero(mask), 10000);
+
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  const auto result = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
+                              {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+  EXPECT_EQ(result.masked_pixels, cv::countNonZero(mask));
+  EXPECT_GT(result.filled_pixels, 0.98 * result.masked_pixels);
+  const double psnr = psnr_over(result.bgr, truth.bgr, result.filled);
+  EXPECT_GT(psnr, 30.0);
+  cv::Mat depth_err;
+  cv::absdiff(result.depth_m, truth.depth, depth_err);
+  double max_err = 0;
+  cv::minMaxLoc(depth_err, nullptr, &max_err, nullptr, nullptr, result.filled);
+  EXPECT_LT(max_err, 0.02);
+  // Pixels outside the mask are untouched.
+  cv::Mat changed;
+  cv::absdiff(result.bgr, cur.bgr, changed);
+  cv::cvtColor(changed, changed, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(cv::countNonZero(changed & (mask == 0)), 0);
+}
+
+TEST(Inpainting, ExcludedSourcePixelsAreNotUsedAndStayUnfilled) {
+  const auto cam = test_camera();
+  const SE3 T_w(Mat3d::Identity(), Vec3d::Zero());
+  View kf = render(cam, T_w, true);
+  View cur = render(cam, T_w, true);
+  const cv::Mat mask = cur.depth < 2.0f;
+  // The keyframe's person is masked out there too, and nothing else saw behind it. (Splats of
+  // radius 0: with a larger radius, wall pixels next to the mask spread into its rim.)
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  config.splat_radius_px = 0;
+  const auto result = inpaint(cur.bgr, cur.depth, mask, T_w.inverse(),
+                              {{T_w, kf.bgr, kf.depth, kf.depth < 2.0f}}, cam, config);
+  EXPECT_EQ(result.filled_pixels, 0);
+  EXPECT_EQ(cv::countNonZero(result.unfilled), cv::countNonZero(mask));
+  // Unknown pixels carry no depth (not the person's).
+  EXPECT_EQ(cv::countNonZero(result.depth_m == 0.0f), cv::countNonZero(mask));
+}
+
+TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
+  const auto cam = test_camera();
+  const SE3 T_w;
+  View cur = render(cam, T_w, false);
+  cv::Mat mask = cv::Mat::zeros(cur.depth.size(), CV_8UC1);
+  mask(cv::Rect(300, 200, 10, 10)).setTo(255);
+  InpaintingConfig config;
+  const auto result = inpaint(cur.bgr, cur.depth, mask, T_w.inverse(), {}, cam, config);
+  EXPECT_EQ(cv::countNonZero(result.image_filled), 100);
+  EXPECT_EQ(cv::countNonZero(result.unfilled), 0);
+  EXPECT_GT(cv::countNonZero(result.depth_m(cv::Rect(300, 200, 10, 10))), 99);
+}
+
+TEST(Inpainting, ConfigErrorsNameTheKey) {
+  InpaintingConfig config;
+  config.num_keyframes = 0;
+  try {
+    config.validate();
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("inpainting.num_keyframes"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace ddl::inpainting
