@@ -1,0 +1,201 @@
+#include "ddl/octomap/octree_map.h"
+
+#include <fmt/format.h>
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <algorithm>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+
+#include "ddl/core/error.h"
+#include "ddl/core/timing.h"
+
+namespace ddl::octomap {
+
+void OctreeConfig::validate() const {
+  auto fail = [](const char* key, const char* what) {
+    throw ConfigError::for_key(std::string("octomap.") + key, what);
+  };
+  if (!(resolution_m >= 0.005 && resolution_m <= 1.0))
+    fail("resolution_m", "must be in [0.005, 1]");
+  if (!(max_range_m > min_range_m && min_range_m >= 0))
+    fail("max_range_m", "must exceed min_range_m >= 0");
+  if (pixel_stride < 1) fail("pixel_stride", "must be >= 1");
+  if (!(prob_hit > 0.5 && prob_hit < 1.0)) fail("prob_hit", "must be in (0.5, 1)");
+  if (!(prob_miss > 0.0 && prob_miss < 0.5)) fail("prob_miss", "must be in (0, 0.5)");
+  if (!(clamping_min > 0 && clamping_min < clamping_max && clamping_max < 1)) {
+    fail("clamping_min", "need 0 < clamping_min < clamping_max < 1");
+  }
+  if (!(occupancy_threshold > 0 && occupancy_threshold < 1))
+    fail("occupancy_threshold", "must be in (0, 1)");
+}
+
+OctreeMap::OctreeMap(const OctreeConfig& config, const camera::PinholeCamera& camera)
+    : config_(config), camera_(camera) {
+  config_.validate();
+  clear();
+}
+
+OctreeMap::~OctreeMap() = default;
+
+void OctreeMap::clear() {
+  tree_ = std::make_unique<::octomap::ColorOcTree>(config_.resolution_m);
+  tree_->setProbHit(config_.prob_hit);
+  tree_->setProbMiss(config_.prob_miss);
+  tree_->setClampingThresMin(config_.clamping_min);
+  tree_->setClampingThresMax(config_.clamping_max);
+  tree_->setOccupancyThres(config_.occupancy_threshold);
+  scans_ = 0;
+}
+
+void OctreeMap::integrate(const KeyframeScan& scan) {
+  Stopwatch watch;
+  ::octomap::Pointcloud cloud;
+  const Mat3d R = scan.T_w_c.rotation();
+  const Vec3d t = scan.T_w_c.translation();
+  const int stride = config_.pixel_stride;
+  struct Coloured {
+    Vec3d p_w;
+    cv::Vec3b bgr;
+  };
+  std::vector<Coloured> colours;
+  for (int v = 0; v < scan.depth_m.rows; v += stride) {
+    const float* drow = scan.depth_m.ptr<float>(v);
+    const std::uint8_t* xrow = scan.exclude_mask.empty() ? nullptr : scan.exclude_mask.ptr(v);
+    for (int u = 0; u < scan.depth_m.cols; u += stride) {
+      const float z = drow[u];
+      if (z < config_.min_range_m || z > config_.max_range_m) continue;
+      if (xrow != nullptr && xrow[u] != 0) continue;
+      const Vec3d p_w = R * camera_.unproject(u, v, z) + t;
+      cloud.push_back(static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
+                      static_cast<float>(p_w.z()));
+      colours.push_back({p_w, scan.bgr.at<cv::Vec3b>(v, u)});
+    }
+  }
+  const ::octomap::point3d origin(static_cast<float>(t.x()), static_cast<float>(t.y()),
+                                  static_cast<float>(t.z()));
+  tree_->insertPointCloud(cloud, origin, config_.max_range_m, /*lazy_eval=*/true,
+                          /*discretize=*/true);
+  tree_->updateInnerOccupancy();
+  for (const Coloured& c : colours) {
+    tree_->averageNodeColor(static_cast<float>(c.p_w.x()), static_cast<float>(c.p_w.y()),
+                            static_cast<float>(c.p_w.z()), c.bgr[2], c.bgr[1], c.bgr[0]);
+  }
+  tree_->updateInnerOccupancy();
+  ++scans_;
+  last_ms_ = watch.elapsed_ms();
+}
+
+void OctreeMap::write_ot(const std::string& path) const {
+  if (!tree_->write(path)) throw Error(fmt::format("{}: cannot write the colour octree", path));
+}
+
+void OctreeMap::write_bt(const std::string& path) const {
+  ::octomap::OcTree occupancy(config_.resolution_m);
+  occupancy.setProbHit(config_.prob_hit);
+  occupancy.setProbMiss(config_.prob_miss);
+  occupancy.setClampingThresMin(config_.clamping_min);
+  occupancy.setClampingThresMax(config_.clamping_max);
+  occupancy.setOccupancyThres(config_.occupancy_threshold);
+  for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
+    ::octomap::OcTreeNode* node = occupancy.setNodeValue(it.getKey(), it->getLogOdds(), true);
+    (void)node;
+  }
+  occupancy.updateInnerOccupancy();
+  if (!occupancy.writeBinary(path)) {
+    throw Error(fmt::format("{}: cannot write the occupancy octree", path));
+  }
+}
+
+void OctreeMap::write_ply(const std::string& path) const {
+  std::vector<std::pair<::octomap::point3d, ::octomap::ColorOcTreeNode::Color>> voxels;
+  for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
+    if (tree_->isNodeOccupied(*it)) voxels.emplace_back(it.getCoordinate(), it->getColor());
+  }
+  std::ofstream file(path);
+  if (!file) throw Error(fmt::format("{}: cannot open for writing", path));
+  file << "ply\nformat ascii 1.0\ncomment DDL-SLAM occupied voxel centres\n"
+       << "element vertex " << voxels.size() << "\n"
+       << "property float x\nproperty float y\nproperty float z\n"
+       << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  for (const auto& [p, c] : voxels) {
+    file << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << int(c.r) << ' ' << int(c.g) << ' '
+         << int(c.b) << '\n';
+  }
+  if (!file) throw Error(fmt::format("{}: write failed", path));
+}
+
+cv::Mat OctreeMap::render(bool oblique, int up_axis, int width, int height) const {
+  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::vector<std::pair<Vec3d, cv::Vec3b>> voxels;
+  Vec3d lo = Vec3d::Constant(1e9), hi = Vec3d::Constant(-1e9);
+  for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
+    if (!tree_->isNodeOccupied(*it)) continue;
+    const auto p = it.getCoordinate();
+    const auto c = it->getColor();
+    const Vec3d v(p.x(), p.y(), p.z());
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+    voxels.push_back({v, cv::Vec3b(c.b, c.g, c.r)});
+  }
+  if (voxels.empty()) return image;
+  // View rotation: the "up" world axis points out of the screen in the top view; the oblique
+  // view tilts it by 50 degrees and turns it by 30 degrees.
+  const int a = (up_axis + 1) % 3, b = (up_axis + 2) % 3;
+  Mat3d axes = Mat3d::Zero();
+  axes(0, a) = 1.0;
+  axes(1, b) = 1.0;
+  axes(2, up_axis) = 1.0;
+  Mat3d view = axes;
+  if (oblique) {
+    view = Mat3d(Eigen::AngleAxisd(-50.0 * M_PI / 180.0, Vec3d::UnitX()) *
+                 Eigen::AngleAxisd(30.0 * M_PI / 180.0, Vec3d::UnitZ())) *
+           axes;
+  }
+  const Vec3d centre = 0.5 * (lo + hi);
+  double max_extent = 1e-6;
+  std::vector<Vec3d> projected;
+  projected.reserve(voxels.size());
+  for (const auto& [p, c] : voxels) {
+    const Vec3d q = view * (p - centre);
+    projected.push_back(q);
+    max_extent = std::max({max_extent, std::abs(q.x()), std::abs(q.y())});
+  }
+  const double scale = 0.45 * std::min(width, height) / max_extent;
+  const int cell = std::max(1, static_cast<int>(std::ceil(config_.resolution_m * scale)));
+  // Painter's order: far (low q.z) first, so nearer (higher) voxels are drawn on top.
+  std::vector<std::size_t> order(voxels.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t l, std::size_t r) { return projected[l].z() < projected[r].z(); });
+  for (std::size_t i : order) {
+    const int x = static_cast<int>(width / 2 + projected[i].x() * scale);
+    const int y = static_cast<int>(height / 2 - projected[i].y() * scale);
+    cv::rectangle(image, cv::Rect(x - cell / 2, y - cell / 2, cell, cell),
+                  cv::Scalar(voxels[i].second[0], voxels[i].second[1], voxels[i].second[2]),
+                  cv::FILLED);
+  }
+  cv::putText(image,
+              fmt::format("{} occupied voxels, {:.2f} m, {}", voxels.size(), config_.resolution_m,
+                          oblique ? "oblique view" : "top view"),
+              {10, height - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(40, 40, 40), 1,
+              cv::LINE_AA);
+  return image;
+}
+
+OctreeStats OctreeMap::stats() const {
+  OctreeStats s;
+  s.scans_integrated = scans_;
+  s.last_integration_ms = last_ms_;
+  for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
+    if (tree_->isNodeOccupied(*it)) {
+      ++s.occupied_leaves;
+    } else {
+      ++s.free_leaves;
+    }
+  }
+  return s;
+}
+
+}  // namespace ddl::octomap

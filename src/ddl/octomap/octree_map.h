@@ -1,0 +1,87 @@
+#pragma once
+// The OctoMap map (DDL-SLAM section III-E): repaired keyframes (colour + depth at their optimized
+// pose) are integrated into an octomap::ColorOcTree by ray casting, so free space along each ray
+// clears what moving objects left in earlier frames. Pixels still marked dynamic (unfilled by
+// inpainting) are not inserted as endpoints.
+// OctreeMap is not thread-safe by itself; OctreeMapper (octree_mapper.h) owns one in its own
+// thread.
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "ddl/camera/pinhole_camera.h"
+#include "ddl/core/se3.h"
+
+namespace octomap {
+class ColorOcTree;
+}
+
+namespace ddl::octomap {
+
+struct OctreeConfig {
+  double resolution_m = 0.05;  // voxel edge; 5 cm resolves desks and chairs at room scale
+  double max_range_m = 4.0;    // rays longer than this are truncated (Kinect noise grows ~ z^2)
+  double min_range_m = 0.3;    // closer measurements are ignored
+  int pixel_stride = 4;        // use every n-th pixel in u and v (speed; voxels are larger anyway)
+  double prob_hit = 0.7;       // OctoMap sensor model
+  double prob_miss = 0.4;
+  double clamping_min = 0.12;
+  double clamping_max = 0.97;
+  double occupancy_threshold = 0.5;
+
+  /// Throws ddl::ConfigError naming "octomap.<field>".
+  void validate() const;
+};
+
+/// One keyframe's contribution.
+struct KeyframeScan {
+  std::uint64_t keyframe_id = 0;
+  SE3 T_w_c;
+  cv::Mat bgr;           // CV_8UC3 (repaired)
+  cv::Mat depth_m;       // CV_32FC1 metres (repaired), 0 = none
+  cv::Mat exclude_mask;  // CV_8UC1 non-zero = do not insert (still dynamic); may be empty
+};
+
+struct OctreeStats {
+  std::size_t scans_integrated = 0;
+  std::size_t occupied_leaves = 0;
+  std::size_t free_leaves = 0;
+  double last_integration_ms = 0.0;
+};
+
+class OctreeMap {
+ public:
+  OctreeMap(const OctreeConfig& config, const camera::PinholeCamera& camera);
+  ~OctreeMap();
+  OctreeMap(const OctreeMap&) = delete;
+  OctreeMap& operator=(const OctreeMap&) = delete;
+
+  void integrate(const KeyframeScan& scan);
+  /// Drops everything (before re-integration with corrected poses).
+  void clear();
+
+  /// Writes the colour octree (.ot, ColorOcTree) and the occupancy tree (.bt, binary OcTree),
+  /// readable by OctoMap's tools (octovis, binvox2bt's counterparts). Throws ddl::Error naming
+  /// the file on failure.
+  void write_ot(const std::string& path) const;
+  void write_bt(const std::string& path) const;
+  /// ASCII PLY of occupied voxel centres with colour.
+  void write_ply(const std::string& path) const;
+  /// PNG rendering: top view (looking down the world axis `up_axis`, 0=x,1=y,2=z) or oblique.
+  cv::Mat render(bool oblique, int up_axis, int width = 800, int height = 600) const;
+
+  OctreeStats stats() const;
+  const ::octomap::ColorOcTree& tree() const { return *tree_; }
+  const OctreeConfig& config() const { return config_; }
+
+ private:
+  OctreeConfig config_;
+  camera::PinholeCamera camera_;
+  std::unique_ptr<::octomap::ColorOcTree> tree_;
+  std::size_t scans_ = 0;
+  double last_ms_ = 0.0;
+};
+
+}  // namespace ddl::octomap
