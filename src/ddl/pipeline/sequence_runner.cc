@@ -117,9 +117,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   const auto gt = dataset.groundtruth_path();
   if (options.evaluate && gt && error == nullptr && outcome.statistics.frames_tracked >= 2) {
     try {
-      const eval::EvalResult result =
-          eval::evaluate(io::read_tum_trajectory(*gt), system.camera_trajectory(), {}, *gt,
-                         camera_path.string());
+      const eval::EvalResult result = eval::evaluate(
+          io::read_tum_trajectory(*gt), system.camera_trajectory(), {}, *gt, camera_path.string());
       const fs::path eval_dir = out_dir / "eval";
       fs::create_directories(eval_dir, ec);
       eval::write_json_report((eval_dir / "eval.json").string(), result);
@@ -138,8 +137,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
                      : 0.0;
       summary["evaluation"] = ev;
       spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
-                   result.ate.stats_m.rmse, result.ate.errors_m.size(),
-                   result.rpe.trans_m.rmse, result.rpe.rot_deg.rmse);
+                   result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
+                   result.rpe.rot_deg.rmse);
     } catch (const Error& e) {
       spdlog::warn("evaluation skipped: {}", e.what());
       summary["evaluation_error"] = e.what();

@@ -25,12 +25,12 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   config_.validate();
   camera_.validate();
   if (!vocabulary_ || vocabulary_->empty()) throw Error("System: the vocabulary is empty");
-  tracker_ = std::make_unique<tracking::Tracker>(config_.tracking, camera_, map_, vocabulary_,
-                                                 database_);
+  tracker_ =
+      std::make_unique<tracking::Tracker>(config_.tracking, camera_, map_, vocabulary_, database_);
   mapper_ = std::make_unique<mapping::LocalMapper>(config_.mapping, camera_, map_, vocabulary_,
                                                    database_);
-  loop_closer_ = std::make_unique<loop::LoopCloser>(config_.loop, camera_, map_, vocabulary_,
-                                                    database_);
+  loop_closer_ =
+      std::make_unique<loop::LoopCloser>(config_.loop, camera_, map_, vocabulary_, database_);
   if (config_.mode == RunMode::kThreaded) {
     mapping_queue_ =
         std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
@@ -48,8 +48,7 @@ System::~System() {
   }
 }
 
-tracking::TrackingResult System::process(const io::RgbdFrame& frame,
-                                         const cv::Mat& dynamic_mask) {
+tracking::TrackingResult System::process(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask) {
   if (finished_) throw Error("System::process called after finish()");
   rethrow_worker_error();
 

@@ -18,7 +18,7 @@ enum class RunMode {
 };
 
 struct SystemConfig {
-  RunMode mode = RunMode::kDeterministic;  // see System
+  RunMode mode = RunMode::kDeterministic;   // see System
   std::size_t keyframe_queue_capacity = 4;  // bounded queues between stages (threaded mode)
   tracking::TrackerConfig tracking;         // ORB extraction settings live in tracking.orb
   mapping::LocalMapperConfig mapping;

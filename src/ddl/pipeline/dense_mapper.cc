@@ -1,0 +1,157 @@
+#include "ddl/pipeline/dense_mapper.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "ddl/core/error.h"
+
+namespace ddl::pipeline {
+namespace fs = std::filesystem;
+
+void DenseMapperConfig::validate() const {
+  if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
+  inpainting.validate();
+  octree.validate();
+}
+
+DenseMapper::DenseMapper(const DenseMapperConfig& config, const camera::PinholeCamera& camera,
+                         std::shared_ptr<const map::Map> map)
+    : config_(config), camera_(camera), map_(std::move(map)) {
+  config_.validate();
+  if (config_.octomap_enabled)
+    octree_ = std::make_unique<octomap::OctreeMap>(config_.octree, camera_);
+  if (!config_.save_inpainted_dir.empty()) fs::create_directories(config_.save_inpainted_dir);
+  if (config_.threaded) {
+    queue_ = std::make_unique<BoundedQueue<DenseKeyframe>>(config_.queue_capacity);
+    thread_ = std::thread([this] { worker(); });
+  }
+}
+
+DenseMapper::~DenseMapper() {
+  if (queue_) queue_->close();
+  if (thread_.joinable()) thread_.join();
+}
+
+void DenseMapper::submit(DenseKeyframe keyframe) {
+  if (finished_) throw Error("DenseMapper::submit after finish()");
+  if (!queue_) {
+    process(std::move(keyframe));
+    return;
+  }
+  if (!queue_->push(std::move(keyframe)) && error_) std::rethrow_exception(error_);
+}
+
+void DenseMapper::worker() {
+  try {
+    while (auto item = queue_->pop()) process(std::move(*item));
+  } catch (...) {
+    error_ = std::current_exception();
+    queue_->close();
+  }
+}
+
+void DenseMapper::finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (queue_) queue_->close();
+  if (thread_.joinable()) thread_.join();
+  if (error_) std::rethrow_exception(error_);
+  // Poses keep moving until the last global BA: integrate once more at the final poses.
+  if (octree_ && map_->big_change_index() != seen_big_change_) rebuild_octree();
+}
+
+void DenseMapper::process(DenseKeyframe item) {
+  Stopwatch watch;
+  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat()};
+  const cv::Mat mask =
+      item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
+  if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
+    std::vector<inpainting::SourceView> sources;
+    const std::size_t n = std::min<std::size_t>(
+        stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes));
+    for (std::size_t k = 0; k < n; ++k) {
+      const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
+      sources.push_back({s.keyframe->T_w_c(), s.bgr, s.depth_m, s.unfilled});
+    }
+    const inpainting::InpaintingResult r = inpainting::inpaint(
+        item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
+    stored.bgr = r.bgr;
+    stored.depth_m = r.depth_m;
+    stored.unfilled = r.unfilled;
+    std::lock_guard lock(stats_mutex_);
+    stats_.masked_pixels += r.masked_pixels;
+    stats_.filled_pixels += r.filled_pixels;
+    stats_.image_filled_pixels += cv::countNonZero(r.image_filled);
+  } else {
+    // Without inpainting the dynamic pixels are simply left out of the map.
+    stored.unfilled = mask;
+  }
+  timings_.record("inpainting", watch.elapsed_ms());
+
+  if (!config_.save_inpainted_dir.empty()) {
+    const fs::path dir(config_.save_inpainted_dir);
+    const std::string stem = fmt::format("{:.6f}", item.keyframe->timestamp_s());
+    cv::imwrite((dir / (stem + "_rgb.png")).string(), stored.bgr);
+    cv::Mat depth16;
+    stored.depth_m.convertTo(depth16, CV_16UC1, camera_.depth_factor);
+    cv::imwrite((dir / (stem + "_depth.png")).string(), depth16);
+    cv::imwrite((dir / (stem + "_unfilled.png")).string(), stored.unfilled);
+  }
+
+  if (octree_) {
+    watch.reset();
+    const int big_change = map_->big_change_index();
+    if (big_change != seen_big_change_) {
+      stored_.push_back(stored);
+      rebuild_octree();
+    } else {
+      octree_->integrate({item.keyframe->id(), item.keyframe->T_w_c(), stored.bgr, stored.depth_m,
+                          stored.unfilled});
+      stored_.push_back(std::move(stored));
+    }
+    timings_.record("octomap", watch.elapsed_ms());
+  } else {
+    stored_.push_back(std::move(stored));
+  }
+  std::lock_guard lock(stats_mutex_);
+  ++stats_.keyframes;
+}
+
+void DenseMapper::rebuild_octree() {
+  seen_big_change_ = map_->big_change_index();
+  octree_->clear();
+  for (const Stored& s : stored_) {
+    if (s.keyframe->is_bad()) continue;
+    octree_->integrate({s.keyframe->id(), s.keyframe->T_w_c(), s.bgr, s.depth_m, s.unfilled});
+  }
+  std::lock_guard lock(stats_mutex_);
+  ++stats_.octree_rebuilds;
+}
+
+std::vector<std::string> DenseMapper::write_outputs(const std::string& dir) const {
+  std::vector<std::string> written;
+  if (!octree_) return written;
+  fs::create_directories(dir);
+  const fs::path d(dir);
+  octree_->write_ot((d / "map.ot").string());
+  octree_->write_bt((d / "map.bt").string());
+  octree_->write_ply((d / "map.ply").string());
+  // The map lives in the SLAM world frame, the first camera's (y points down, roughly
+  // "up" reversed), so the top view looks along y.
+  cv::imwrite((d / "map_top.png").string(), octree_->render(false, 1));
+  cv::imwrite((d / "map_oblique.png").string(), octree_->render(true, 1));
+  for (const char* f : {"map.ot", "map.bt", "map.ply", "map_top.png", "map_oblique.png"}) {
+    written.push_back((d / f).string());
+  }
+  return written;
+}
+
+DenseStats DenseMapper::stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return stats_;
+}
+
+}  // namespace ddl::pipeline

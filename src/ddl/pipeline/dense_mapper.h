@@ -1,0 +1,101 @@
+#pragma once
+// The back end of DDL-SLAM section III-E, after tracking: every new keyframe is repaired by
+// background inpainting from the previous (already repaired) keyframes and integrated into the
+// OctoMap. In threaded mode it runs in its own thread behind a bounded queue, so neither stage
+// stalls tracking; in deterministic mode it runs inline. When loop closing or global BA moves
+// keyframes (Map::big_change_index), the octree is rebuilt from the stored repaired keyframes at
+// their corrected poses.
+// Thread-safety: submit(), finish() and the accessors from one thread (the pipeline's).
+
+#include <atomic>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "ddl/camera/pinhole_camera.h"
+#include "ddl/core/bounded_queue.h"
+#include "ddl/core/timing.h"
+#include "ddl/inpainting/background_inpainter.h"
+#include "ddl/map/keyframe.h"
+#include "ddl/map/map.h"
+#include "ddl/octomap/octree_map.h"
+
+namespace ddl::pipeline {
+
+struct DenseMapperConfig {
+  bool inpainting_enabled = true;  // repair keyframes before mapping
+  bool octomap_enabled = true;     // build the octree
+  bool threaded = false;           // own thread (threaded pipeline mode)
+  std::size_t queue_capacity = 8;  // keyframes waiting (threaded)
+  std::string save_inpainted_dir;  // non-empty: write repaired keyframes here
+  inpainting::InpaintingConfig inpainting;
+  octomap::OctreeConfig octree;
+
+  void validate() const;
+};
+
+struct DenseKeyframe {
+  map::KeyFramePtr keyframe;
+  cv::Mat bgr;  // as tracked (undistorted)
+  cv::Mat depth_m;
+  cv::Mat dynamic_mask;  // combined dynamic mask of the frame (may be empty)
+};
+
+struct DenseStats {
+  std::size_t keyframes = 0;
+  long masked_pixels = 0;
+  long filled_pixels = 0;
+  long image_filled_pixels = 0;
+  std::size_t octree_rebuilds = 0;
+};
+
+class DenseMapper {
+ public:
+  DenseMapper(const DenseMapperConfig& config, const camera::PinholeCamera& camera,
+              std::shared_ptr<const map::Map> map);
+  ~DenseMapper();
+  DenseMapper(const DenseMapper&) = delete;
+  DenseMapper& operator=(const DenseMapper&) = delete;
+
+  void submit(DenseKeyframe keyframe);
+  /// Drains the queue, joins the thread, rebuilds the octree once more if poses moved since.
+  void finish();
+  /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`.
+  std::vector<std::string> write_outputs(const std::string& dir) const;
+
+  DenseStats stats() const;
+  const TimingStats& timings() const { return timings_; }
+  const octomap::OctreeMap* octree() const { return octree_.get(); }
+
+ private:
+  struct Stored {
+    map::KeyFramePtr keyframe;
+    cv::Mat bgr;       // repaired
+    cv::Mat depth_m;   // repaired
+    cv::Mat unfilled;  // still-dynamic pixels
+  };
+  void worker();
+  void process(DenseKeyframe item);
+  void rebuild_octree();
+
+  DenseMapperConfig config_;
+  camera::PinholeCamera camera_;
+  std::shared_ptr<const map::Map> map_;
+  std::unique_ptr<octomap::OctreeMap> octree_;
+  std::vector<Stored> stored_;  // all repaired keyframes, in insertion order
+  int seen_big_change_ = 0;
+  TimingStats timings_;
+  mutable std::mutex stats_mutex_;
+  DenseStats stats_;
+  std::unique_ptr<BoundedQueue<DenseKeyframe>> queue_;
+  std::thread thread_;
+  std::exception_ptr error_;
+  bool finished_ = false;
+};
+
+}  // namespace ddl::pipeline
