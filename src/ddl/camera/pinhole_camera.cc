@@ -45,21 +45,23 @@ Undistorter::Undistorter(const PinholeCamera& camera) : active_(camera.has_disto
   if (!active_) return;
   const cv::Mat K(camera.K());
   const cv::Mat dist(1, 5, CV_64F, const_cast<double*>(camera.distortion.data()));
+  // Fixed-point maps (CV_16SC2 + interpolation table): remap runs about twice as fast as with
+  // float maps, at 1/32 pixel interpolation precision.
   cv::initUndistortRectifyMap(K, dist, cv::Mat(), K, cv::Size(camera.width, camera.height),
-                              CV_32FC1, map_x_, map_y_);
+                              CV_16SC2, map_xy_, map_interpolation_);
 }
 
 cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {
   if (!active_) return rgb;
   cv::Mat out;
-  cv::remap(rgb, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(rgb, out, map_xy_, map_interpolation_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
   return out;
 }
 
 cv::Mat Undistorter::undistort_depth(const cv::Mat& depth) const {
   if (!active_) return depth;
   cv::Mat out;
-  cv::remap(depth, out, map_x_, map_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  cv::remap(depth, out, map_xy_, map_interpolation_, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   return out;
 }
 

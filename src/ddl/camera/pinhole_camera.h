@@ -59,7 +59,7 @@ class Undistorter {
 
  private:
   bool active_ = false;
-  cv::Mat map_x_, map_y_;
+  cv::Mat map_xy_, map_interpolation_;  // fixed-point remap maps (CV_16SC2, CV_16UC1)
 };
 
 }  // namespace ddl::camera

@@ -1,0 +1,321 @@
+#include "ddl/io/tum_dataset.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "ddl/core/error.h"
+#include "ddl/io/associate.h"
+#include "ddl/io/text_table.h"
+
+namespace ddl::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+// One `timestamp path` list (rgb.txt or depth.txt), validated.
+struct StampedFileList {
+  std::vector<double> stamps;
+  std::vector<std::string> paths;
+};
+
+std::string resolve(const std::string& dir, const std::string& relative) {
+  const fs::path p(relative);
+  return p.is_absolute() ? p.string() : (fs::path(dir) / p).string();
+}
+
+void require_increasing(const std::string& file, std::size_t line, double stamp,
+                        const std::string& text, const std::vector<double>& previous) {
+  if (!previous.empty() && stamp <= previous.back()) {
+    throw InputError::at_line(
+        file, line,
+        fmt::format("timestamp {} does not increase (previous {:.6f}); timestamps must be "
+                    "strictly increasing",
+                    text, previous.back()));
+  }
+}
+
+double parse_stamp(const std::string& text, const std::string& file, std::size_t line) {
+  const double stamp = parse_double(text, file, line);
+  if (!std::isfinite(stamp)) {
+    throw InputError::at_line(file, line, fmt::format("timestamp '{}' is not finite", text));
+  }
+  return stamp;
+}
+
+StampedFileList read_stamped_file_list(const std::string& dir, const std::string& file) {
+  StampedFileList list;
+  for (const TextRow& row : read_text_table(file)) {
+    if (row.fields.size() != 2) {
+      throw InputError::at_line(
+          file, row.line,
+          fmt::format("expected 2 fields 'timestamp path', found {}", row.fields.size()));
+    }
+    const double stamp = parse_stamp(row.fields[0], file, row.line);
+    require_increasing(file, row.line, stamp, row.fields[0], list.stamps);
+    list.stamps.push_back(stamp);
+    list.paths.push_back(resolve(dir, row.fields[1]));
+  }
+  if (list.stamps.empty()) throw InputError::at(file, "no frames listed (empty list)");
+  return list;
+}
+
+std::string describe_type(const cv::Mat& image) {
+  const int depth = image.depth();
+  const char* bits = depth == CV_8U || depth == CV_8S     ? "8-bit"
+                     : depth == CV_16U || depth == CV_16S ? "16-bit"
+                     : depth == CV_32F || depth == CV_32S ? "32-bit"
+                                                          : "64-bit";
+  const char* kind = depth == CV_32F || depth == CV_64F ? " float" : "";
+  return fmt::format("{}{} {}-channel", bits, kind, image.channels());
+}
+
+std::string describe_size(const cv::Mat& image) {
+  return fmt::format("{}x{}", image.cols, image.rows);
+}
+
+cv::Mat read_image(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError::at(path, fmt::format("{} image not found", what));
+  if (fs::is_directory(path, ec)) {
+    throw InputError::at(path, fmt::format("{} image path is a directory", what));
+  }
+  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image.empty()) {
+    throw InputError::at(
+        path,
+        fmt::format("cannot decode {} image (corrupt, truncated or unsupported format)", what));
+  }
+  return image;
+}
+
+cv::Mat to_bgr8(const cv::Mat& image, const std::string& path) {
+  if (image.depth() != CV_8U) {
+    throw InputError::at(path, fmt::format("RGB image must be 8-bit (3-channel colour or "
+                                           "grayscale); found {}",
+                                           describe_type(image)));
+  }
+  cv::Mat bgr;
+  switch (image.channels()) {
+    case 3:
+      return image;
+    case 1:
+      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+      return bgr;
+    case 4:  // PNG with alpha: the colour is what matters.
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+      return bgr;
+    default:
+      throw InputError::at(path, fmt::format("RGB image must have 1, 3 or 4 channels; found {}",
+                                             describe_type(image)));
+  }
+}
+
+}  // namespace
+
+AssociationSource parse_association_source(const std::string& text, const std::string& key) {
+  if (text == "auto") return AssociationSource::kAuto;
+  if (text == "file") return AssociationSource::kFile;
+  if (text == "timestamps") return AssociationSource::kTimestamps;
+  throw ConfigError::for_key(key, fmt::format("'{}' is not one of auto, file, timestamps", text));
+}
+
+std::string to_string(AssociationSource source) {
+  switch (source) {
+    case AssociationSource::kAuto:
+      return "auto";
+    case AssociationSource::kFile:
+      return "file";
+    case AssociationSource::kTimestamps:
+      return "timestamps";
+  }
+  return "?";
+}
+
+void SequenceOptions::validate() const {
+  if (!std::isfinite(max_difference_s) || max_difference_s <= 0.0 || max_difference_s > 1.0) {
+    throw ConfigError::for_key("dataset.max_difference",
+                               fmt::format("must be in (0, 1] seconds (got {})", max_difference_s));
+  }
+  if (association == AssociationSource::kTimestamps && !associations_file.empty()) {
+    throw ConfigError::for_key(
+        "dataset.associations_file",
+        fmt::format("'{}' is given but associations are computed from timestamps",
+                    associations_file));
+  }
+}
+
+namespace {
+
+const camera::PinholeCamera& validated(const camera::PinholeCamera& camera) {
+  camera.validate();
+  return camera;
+}
+
+}  // namespace
+
+std::string sequence_name(const std::string& dir) {
+  fs::path p = fs::path(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();  // trailing separator
+  std::string name = p.filename().string();
+  if (name.empty() || name == "." || name == "..") {
+    std::error_code ec;
+    const fs::path absolute = fs::weakly_canonical(fs::absolute(dir), ec);
+    if (!ec) name = absolute.filename().string();
+  }
+  return name;
+}
+
+TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& camera,
+                       const SequenceOptions& options)
+    : dir_(dir),
+      name_(sequence_name(dir)),
+      input_camera_(validated(camera)),
+      camera_(camera.undistorted()),
+      undistorter_(camera) {
+  options.validate();
+  std::error_code ec;
+  if (!fs::exists(dir_, ec)) throw InputError::at(dir_, "sequence folder not found");
+  if (!fs::is_directory(dir_, ec)) throw InputError::at(dir_, "is not a folder");
+
+  const std::string default_associations = (fs::path(dir_) / "associations.txt").string();
+  switch (options.association) {
+    case AssociationSource::kAuto:
+      if (!options.associations_file.empty()) {
+        read_association_file(options.associations_file);
+      } else if (fs::exists(default_associations, ec)) {
+        read_association_file(default_associations);
+      } else {
+        associate_timestamps(options.max_difference_s);
+      }
+      break;
+    case AssociationSource::kFile:
+      read_association_file(options.associations_file.empty() ? default_associations
+                                                              : options.associations_file);
+      break;
+    case AssociationSource::kTimestamps:
+      associate_timestamps(options.max_difference_s);
+      break;
+  }
+
+  if (options.check_files_on_open) {
+    for (const FramePair& pair : pairs_) {
+      if (!fs::exists(pair.rgb_path, ec)) {
+        throw InputError::at(pair.rgb_path, fmt::format("RGB image not found (listed by {})",
+                                                        association_description_));
+      }
+      if (!fs::exists(pair.depth_path, ec)) {
+        throw InputError::at(pair.depth_path, fmt::format("depth image not found (listed by {})",
+                                                          association_description_));
+      }
+    }
+  }
+
+  const std::string groundtruth = (fs::path(dir_) / "groundtruth.txt").string();
+  if (fs::is_regular_file(groundtruth, ec)) groundtruth_path_ = groundtruth;
+
+  spdlog::info("{}: {} RGB-D frames ({}), camera '{}'{}{}", name_, pairs_.size(),
+               association_description_, input_camera_.name,
+               input_camera_.has_distortion() ? " (undistorting)" : "",
+               groundtruth_path_ ? ", ground truth present" : ", no ground truth");
+}
+
+void TumDataset::read_association_file(const std::string& path) {
+  std::vector<double> rgb_stamps;
+  for (const TextRow& row : read_text_table(path)) {
+    if (row.fields.size() != 4) {
+      throw InputError::at_line(
+          path, row.line,
+          fmt::format("expected 4 fields 'rgb_timestamp rgb_path depth_timestamp depth_path', "
+                      "found {}",
+                      row.fields.size()));
+    }
+    FramePair pair;
+    pair.rgb_timestamp_s = parse_stamp(row.fields[0], path, row.line);
+    pair.rgb_path = resolve(dir_, row.fields[1]);
+    pair.depth_timestamp_s = parse_stamp(row.fields[2], path, row.line);
+    pair.depth_path = resolve(dir_, row.fields[3]);
+    require_increasing(path, row.line, pair.rgb_timestamp_s, row.fields[0], rgb_stamps);
+    rgb_stamps.push_back(pair.rgb_timestamp_s);
+    pairs_.push_back(std::move(pair));
+  }
+  if (pairs_.empty()) throw InputError::at(path, "no frames listed (empty list)");
+  association_description_ = fs::path(path).filename().string();
+}
+
+void TumDataset::associate_timestamps(double max_difference_s) {
+  const std::string rgb_file = (fs::path(dir_) / "rgb.txt").string();
+  const std::string depth_file = (fs::path(dir_) / "depth.txt").string();
+  const StampedFileList rgb = read_stamped_file_list(dir_, rgb_file);
+  const StampedFileList depth = read_stamped_file_list(dir_, depth_file);
+  const std::vector<StampMatch> matches =
+      associate(rgb.stamps, depth.stamps, 0.0, max_difference_s);
+  if (matches.empty()) {
+    throw InputError::at(
+        dir_, fmt::format("no RGB/depth pairs: none of the {} stamps in rgb.txt is within {} s of "
+                          "one of the {} stamps in depth.txt",
+                          rgb.stamps.size(), max_difference_s, depth.stamps.size()));
+  }
+  pairs_.reserve(matches.size());
+  for (const StampMatch& m : matches) {
+    pairs_.push_back(
+        {rgb.stamps[m.first], rgb.paths[m.first], depth.stamps[m.second], depth.paths[m.second]});
+  }
+  association_description_ = fmt::format(
+      "associate(rgb.txt, depth.txt, max_difference {} s): {} of {} RGB and {} depth frames",
+      max_difference_s, matches.size(), rgb.stamps.size(), depth.stamps.size());
+}
+
+double TumDataset::timestamp(std::size_t i) const {
+  if (i >= pairs_.size()) {
+    throw std::out_of_range(fmt::format("{}: frame {} of {}", name_, i, pairs_.size()));
+  }
+  return pairs_[i].rgb_timestamp_s;
+}
+
+RgbdFrame TumDataset::frame(std::size_t i) const {
+  if (i >= pairs_.size()) {
+    throw std::out_of_range(fmt::format("{}: frame {} of {}", name_, i, pairs_.size()));
+  }
+  const FramePair& pair = pairs_[i];
+  const cv::Mat rgb = to_bgr8(read_image(pair.rgb_path, "RGB"), pair.rgb_path);
+  const cv::Mat depth_raw = read_image(pair.depth_path, "depth");
+  if (depth_raw.type() != CV_16UC1) {
+    throw InputError::at(
+        pair.depth_path,
+        fmt::format("depth must be 16-bit single-channel (raw units, {} per metre); found {}",
+                    input_camera_.depth_factor, describe_type(depth_raw)));
+  }
+  if (depth_raw.cols != input_camera_.width || depth_raw.rows != input_camera_.height) {
+    throw InputError::at(
+        pair.depth_path,
+        fmt::format("depth image is {} but camera '{}' expects {}x{}", describe_size(depth_raw),
+                    input_camera_.name, input_camera_.width, input_camera_.height));
+  }
+  if (rgb.size() != depth_raw.size()) {
+    throw InputError::at(
+        pair.rgb_path,
+        fmt::format("RGB image is {} but its depth image {} is {} (camera '{}' expects {}x{}); "
+                    "RGB and depth must be registered at the same size",
+                    describe_size(rgb), pair.depth_path, describe_size(depth_raw),
+                    input_camera_.name, input_camera_.width, input_camera_.height));
+  }
+
+  RgbdFrame frame;
+  frame.index = i;
+  frame.timestamp_s = pair.rgb_timestamp_s;
+  frame.rgb_path = pair.rgb_path;
+  frame.depth_path = pair.depth_path;
+  frame.rgb = undistorter_.undistort_rgb(rgb);
+  cv::Mat depth_m;
+  depth_raw.convertTo(depth_m, CV_32F, 1.0 / input_camera_.depth_factor);  // 0 stays 0
+  frame.depth_m = undistorter_.undistort_depth(depth_m);
+  return frame;
+}
+
+}  // namespace ddl::io
