@@ -1,0 +1,48 @@
+#include "ddl/eval/tracked.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "ddl/core/error.h"
+#include "ddl/io/associate.h"
+#include "ddl/io/text_table.h"
+
+namespace ddl::eval {
+
+std::vector<double> read_frame_stamps(const std::string& path) {
+  std::vector<double> stamps;
+  for (const io::TextRow& row : io::read_text_table(path)) {
+    stamps.push_back(io::parse_double(row.fields[0], path, row.line));
+  }
+  if (stamps.empty()) throw InputError::at(path, "no frames (empty frame list)");
+  std::sort(stamps.begin(), stamps.end());
+  stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+  return stamps;
+}
+
+TrackedStats compute_tracked(const std::vector<double>& frame_stamps_s, const io::Trajectory& gt,
+                             const io::Trajectory& est, double offset_s, double max_difference_s) {
+  TrackedStats s;
+  s.frames_total = frame_stamps_s.size();
+  if (gt.empty()) return s;
+  const double t0 = gt.front().timestamp_s;
+  const double t1 = gt.back().timestamp_s;
+  std::vector<double> frames;
+  for (double t : frame_stamps_s) {
+    if (t >= t0 && t <= t1) frames.push_back(t);
+  }
+  std::vector<double> est_stamps;
+  est_stamps.reserve(est.size());
+  for (const io::StampedPose& p : est) {
+    est_stamps.push_back(p.timestamp_s);
+    if (p.timestamp_s + offset_s >= t0 && p.timestamp_s + offset_s <= t1) ++s.est_poses_in_gt_span;
+  }
+  s.frames_in_gt_span = frames.size();
+  s.tracked_frames = io::associate(frames, est_stamps, offset_s, max_difference_s).size();
+  s.ratio = frames.empty()
+                ? std::numeric_limits<double>::quiet_NaN()
+                : static_cast<double>(s.tracked_frames) / static_cast<double>(s.frames_in_gt_span);
+  return s;
+}
+
+}  // namespace ddl::eval
