@@ -22,7 +22,11 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
 
   int exit_code = ddl::app::kOk;
+  ddl::app::add_run_command(app, exit_code);
   ddl::app::add_eval_command(app, exit_code);
+  ddl::app::add_vocab_command(app, exit_code);
+  ddl::app::add_synth_command(app, exit_code);
+  ddl::app::add_config_command(app, exit_code);
 
   try {
     app.parse(argc, argv);

@@ -317,6 +317,31 @@ bool YamlMap::read(const std::string& key, std::vector<double>& value) const {
   return true;
 }
 
+std::vector<std::string> YamlMap::get_strings(const std::string& key) const {
+  const YAML::Node value = required(key, "a list of strings");
+  if (!value.IsSequence()) {
+    fail(key, fmt::format("expected a list of strings [a, b, ...], got {}", shown(value)));
+  }
+  std::vector<std::string> out;
+  out.reserve(value.size());
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const YAML::Node item = value[i];
+    if (!item.IsScalar()) {
+      throw ConfigError(fmt::format("{}: {}[{}]: expected a string, got {}",
+                                    where(source(), line_of_node(item)), key_path(key), i,
+                                    shown(item)));
+    }
+    out.push_back(item.Scalar());
+  }
+  return out;
+}
+
+bool YamlMap::read(const std::string& key, std::vector<std::string>& value) const {
+  if (!has(key)) return false;
+  value = get_strings(key);
+  return true;
+}
+
 bool YamlMap::read_choice(const std::string& key, std::string& value,
                           std::initializer_list<std::string_view> choices) const {
   if (!has(key)) return false;

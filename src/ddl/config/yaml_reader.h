@@ -65,6 +65,8 @@ class YamlMap {
                          std::initializer_list<std::string_view> choices) const;
   /// A list of numbers; `expected_size` 0 accepts any length.
   std::vector<double> get_doubles(const std::string& key, std::size_t expected_size = 0) const;
+  /// A list of strings (scalars).
+  std::vector<std::string> get_strings(const std::string& key) const;
   YamlMap get_map(const std::string& key) const;
 
   // Optional values: return false and leave `value` unchanged when the key is absent; throw like
@@ -74,6 +76,7 @@ class YamlMap {
   bool read(const std::string& key, bool& value) const;
   bool read(const std::string& key, std::string& value) const;
   bool read(const std::string& key, std::vector<double>& value) const;
+  bool read(const std::string& key, std::vector<std::string>& value) const;
   template <std::size_t N>
   bool read(const std::string& key, std::array<double, N>& value) const {
     if (!has(key)) return false;

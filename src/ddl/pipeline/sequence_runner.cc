@@ -10,6 +10,7 @@
 #include "ddl/eval/evaluate.h"
 #include "ddl/eval/plot.h"
 #include "ddl/eval/report.h"
+#include "ddl/pipeline/frame_prefetcher.h"
 
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
@@ -42,7 +43,14 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"keyframes_created", s.keyframes_created},
           {"keyframes", s.keyframes},
           {"map_points", s.map_points},
-          {"loops_closed", s.loops_closed}};
+          {"loops_closed", s.loops_closed},
+          {"map_resets", s.map_resets},
+          {"dense",
+           {{"keyframes", s.dense.keyframes},
+            {"masked_pixels", s.dense.masked_pixels},
+            {"filled_pixels", s.dense.filled_pixels},
+            {"image_filled_pixels", s.dense.image_filled_pixels},
+            {"octree_rebuilds", s.dense.octree_rebuilds}}}};
 }
 
 }  // namespace
@@ -64,22 +72,21 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   Stopwatch wall;
   std::size_t done = 0;
   try {
-    for (std::size_t i = begin; i < end; ++i) {
+    FramePrefetcher prefetcher(dataset, begin, end);
+    while (true) {
       if (stop != nullptr && stop->load()) {
         outcome.interrupted = true;
         break;
       }
-      Stopwatch load_watch;
-      const io::RgbdFrame frame = dataset.frame(i);
-      const double load_ms = load_watch.elapsed_ms();
-      const tracking::TrackingResult result = system.process(frame);
+      std::optional<io::RgbdFrame> frame = prefetcher.next();
+      if (!frame) break;
+      const FrameOutcome result = system.process(*frame);
       ++done;
       if (progress) {
         progress(done, total,
                  fmt::format("{} kf, {}", system.statistics().keyframes_created,
-                             tracking::to_string(result.state)));
+                             tracking::to_string(result.tracking.state)));
       }
-      (void)load_ms;
     }
     system.finish();
   } catch (...) {
@@ -101,6 +108,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
                            "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
 
   outcome.statistics = system.statistics();
+  std::vector<std::string> map_files;
+  try {
+    map_files = system.dense_mapper().write_outputs(out_dir.string());
+  } catch (const Error& e) {
+    spdlog::error("writing the octree map failed: {}", e.what());
+  }
   nlohmann::json& summary = outcome.summary;
   summary["sequence"] = dataset.name();
   summary["frames_in_sequence"] = dataset.size();
@@ -110,9 +123,17 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
   summary["statistics"] = statistics_to_json(outcome.statistics);
-  summary["timing_ms"] = timings_to_json(system.timings());
-  summary["outputs"] = {{"camera_trajectory", camera_path.filename().string()},
-                        {"keyframe_trajectory", keyframe_path.filename().string()}};
+  nlohmann::json timing = timings_to_json(system.timings());
+  timing.update(timings_to_json(system.dense_mapper().timings()));
+  summary["timing_ms"] = timing;
+  summary["dynamic"] = {{"enabled", system.config().dynamic.enabled},
+                        {"segmenter", system.dynamic_front_end().segmenter_description()},
+                        {"geometry_check", system.config().dynamic.use_geometry}};
+  for (const std::string& f : map_files) {
+    summary["outputs"]["map"].push_back(fs::path(f).filename().string());
+  }
+  summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
+  summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
 
   const auto gt = dataset.groundtruth_path();
   if (options.evaluate && gt && error == nullptr && outcome.statistics.frames_tracked >= 2) {

@@ -1,6 +1,10 @@
 #include "ddl/pipeline/system.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 #include "ddl/core/error.h"
 
@@ -8,11 +12,13 @@ namespace ddl::pipeline {
 
 void SystemConfig::validate() const {
   if (keyframe_queue_capacity == 0) {
-    throw ConfigError::for_key("pipeline.keyframe_queue_capacity", "must be at least 1");
+    throw ConfigError::for_key("keyframe_queue_capacity", "must be at least 1");
   }
   tracking.validate();
   mapping.validate();
   loop.validate();
+  dynamic.validate();
+  dense.validate();
 }
 
 System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
@@ -29,12 +35,33 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
       std::make_unique<tracking::Tracker>(config_.tracking, camera_, map_, vocabulary_, database_);
   mapper_ = std::make_unique<mapping::LocalMapper>(config_.mapping, camera_, map_, vocabulary_,
                                                    database_);
+  loop::LoopCloserConfig loop_config = config_.loop;
+  loop_config.global_ba_in_background = config_.mode == RunMode::kThreaded;
   loop_closer_ =
-      std::make_unique<loop::LoopCloser>(config_.loop, camera_, map_, vocabulary_, database_);
+      std::make_unique<loop::LoopCloser>(loop_config, camera_, map_, vocabulary_, database_);
+  dynamic_ = std::make_unique<DynamicFrontEnd>(config_.dynamic, camera_, config_.shared_dir);
+  DenseMapperConfig dense_config = config_.dense;
+  dense_config.threaded = config_.mode == RunMode::kThreaded;
+  dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
+  if (config_.save_masks && !config_.output_dir.empty()) {
+    std::filesystem::create_directories(std::filesystem::path(config_.output_dir) / "masks");
+  }
   if (config_.mode == RunMode::kThreaded) {
     mapping_queue_ =
         std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
     loop_queue_ = std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
+    loop_closer_->set_mapping_pause({[this] {
+                                       std::unique_lock lock(pause_mutex_);
+                                       ++pause_requests_;
+                                       pause_cv_.wait(lock, [&] { return !mapping_in_progress_; });
+                                     },
+                                     [this] {
+                                       {
+                                         std::lock_guard lock(pause_mutex_);
+                                         --pause_requests_;
+                                       }
+                                       pause_cv_.notify_all();
+                                     }});
     mapping_thread_ = std::thread([this] { mapping_worker(); });
     loop_thread_ = std::thread([this] { loop_worker(); });
   }
@@ -42,37 +69,91 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
 
 System::~System() {
   try {
-    shutdown_workers();
+    shutdown_workers(/*wait_for_global_ba=*/false);
   } catch (...) {
     spdlog::error("System: error while shutting down the workers");
   }
 }
 
-tracking::TrackingResult System::process(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask) {
+std::optional<SE3> System::low_cost_pose() const {
+  if (!last_T_c_w_) return std::nullopt;
+  if (!velocity_) return last_T_c_w_;
+  return *velocity_ * *last_T_c_w_;
+}
+
+DynamicMasks System::dynamic_masks(const io::RgbdFrame& frame) {
+  DynamicMasks masks;
+  if (!dynamic_->enabled()) return masks;
+  masks.cnn = dynamic_->cnn_mask(frame, &masks.segmentation_ms);
+  if (dynamic_->has_segmenter()) timings_.record("segmentation", masks.segmentation_ms);
+  // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
+  // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
+  const std::optional<SE3> T_c_w = low_cost_pose();
+  if (T_c_w && last_reference_ && !last_reference_->is_bad()) {
+    Stopwatch watch;
+    std::vector<map::KeyFramePtr> references{last_reference_};
+    for (auto& kf : last_reference_->best_covisibles(
+             static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
+      references.push_back(std::move(kf));
+    }
+    masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats);
+    masks.geometry_ms = watch.elapsed_ms();
+    timings_.record("geometry_check", masks.geometry_ms);
+  }
+  dynamic_->finish_masks(masks);
+  return masks;
+}
+
+FrameOutcome System::process(const io::RgbdFrame& frame) {
   if (finished_) throw Error("System::process called after finish()");
   rethrow_worker_error();
+  Stopwatch frame_watch;
+
+  FrameOutcome outcome;
+  outcome.masks = dynamic_masks(frame);
 
   tracking::MappingStatus status;
   if (config_.mode == RunMode::kThreaded) {
     status.queued_keyframes = mapping_queue_->size();
     status.accepts_keyframes = status.queued_keyframes == 0 && !mapper_busy_.load();
   }
-  Stopwatch watch;
-  tracking::TrackingResult result = tracker_->track(frame, dynamic_mask, status);
-  timings_.record("tracking", watch.elapsed_ms());
-  for (const auto& [stage, ms] : result.stage_ms) timings_.record("tracking." + stage, ms);
+  tracking::TrackingResult& result = outcome.tracking;
+  result = tracker_->track(frame, outcome.masks.exclusion, status);
+  timings_.record("tracking", result.timings.total_ms);
+  timings_.record("tracking.features", result.timings.features_ms);
+  timings_.record("tracking.initial_pose", result.timings.initial_pose_ms);
+  timings_.record("tracking.local_map", result.timings.local_map_ms);
+  timings_.record("tracking.keyframe", result.timings.keyframe_ms);
 
   ++stats_.frames;
-  if (result.state == tracking::TrackingState::kOk ||
-      result.state == tracking::TrackingState::kRelocalized) {
+  if (result.tracked()) {
     ++stats_.frames_tracked;
-  } else if (result.state == tracking::TrackingState::kLost) {
-    ++stats_.frames_lost;
+    const SE3 T_c_w = result.T_w_c->inverse();
+    velocity_ = last_T_c_w_ ? std::optional<SE3>(T_c_w * last_T_c_w_->inverse()) : std::nullopt;
+    last_T_c_w_ = T_c_w;
+    last_reference_ = result.reference_keyframe;
+  } else {
+    last_T_c_w_.reset();
+    velocity_.reset();
+    if (result.state == tracking::TrackingState::kLost) ++stats_.frames_lost;
   }
   if (result.state == tracking::TrackingState::kRelocalized) ++stats_.relocalizations;
+  if (result.map_reset) {
+    ++stats_.map_resets;
+    // The map was cleared: nothing downstream may keep using the old keyframes.
+    last_reference_.reset();
+  }
+
+  if (config_.save_masks && !config_.output_dir.empty() && !outcome.masks.combined.empty()) {
+    const auto path = std::filesystem::path(config_.output_dir) / "masks" /
+                      fmt::format("{:.6f}.png", frame.timestamp_s);
+    cv::imwrite(path.string(), outcome.masks.combined);
+  }
 
   if (result.new_keyframe) {
     ++stats_.keyframes_created;
+    dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m);
+    dense_->submit({result.new_keyframe, frame.rgb, frame.depth_m, outcome.masks.combined});
     if (config_.mode == RunMode::kDeterministic) {
       handle_keyframe_inline(result.new_keyframe);
     } else {
@@ -80,7 +161,8 @@ tracking::TrackingResult System::process(const io::RgbdFrame& frame, const cv::M
       if (!mapping_queue_->push(result.new_keyframe)) rethrow_worker_error();
     }
   }
-  return result;
+  timings_.record("frame_total", frame_watch.elapsed_ms());
+  return outcome;
 }
 
 void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {
@@ -97,14 +179,29 @@ void System::mapping_worker() {
   try {
     while (auto keyframe = mapping_queue_->pop()) {
       mapper_busy_.store(true);
+      {
+        std::unique_lock lock(pause_mutex_);
+        pause_cv_.wait(lock, [&] { return pause_requests_ == 0; });
+        mapping_in_progress_ = true;
+      }
       abort_local_ba_.store(false);
       Stopwatch watch;
       map::KeyFramePtr kept = mapper_->process(*keyframe, &abort_local_ba_);
       timings_.record("local_mapping", watch.elapsed_ms());
+      {
+        std::lock_guard lock(pause_mutex_);
+        mapping_in_progress_ = false;
+      }
+      pause_cv_.notify_all();
       mapper_busy_.store(false);
       if (kept && !loop_queue_->push(kept)) break;
     }
   } catch (...) {
+    {
+      std::lock_guard lock(pause_mutex_);
+      mapping_in_progress_ = false;
+    }
+    pause_cv_.notify_all();
     mapper_busy_.store(false);
     store_error(std::current_exception());
   }
@@ -136,24 +233,30 @@ void System::store_error(std::exception_ptr error) {
 
 void System::rethrow_worker_error() {
   if (!failed_.load()) return;
-  shutdown_workers();
+  shutdown_workers(/*wait_for_global_ba=*/false);
   std::lock_guard lock(error_mutex_);
   if (worker_error_) std::rethrow_exception(worker_error_);
 }
 
-void System::shutdown_workers() {
+void System::shutdown_workers(bool wait_for_global_ba) {
   if (mapping_queue_) mapping_queue_->close();
   if (mapping_thread_.joinable()) mapping_thread_.join();
   if (loop_queue_) loop_queue_->close();
   if (loop_thread_.joinable()) loop_thread_.join();
-  if (loop_closer_) loop_closer_->stop();
+  if (loop_closer_) {
+    if (wait_for_global_ba) {
+      loop_closer_->wait_for_global_ba();
+    } else {
+      loop_closer_->stop();
+    }
+  }
 }
 
 void System::finish() {
   if (finished_) return;
   finished_ = true;
-  shutdown_workers();
-  if (loop_closer_) loop_closer_->wait_for_global_ba();
+  shutdown_workers(/*wait_for_global_ba=*/true);
+  dense_->finish();
   std::lock_guard lock(error_mutex_);
   if (worker_error_) std::rethrow_exception(worker_error_);
 }
@@ -173,6 +276,7 @@ SystemStatistics System::statistics() const {
   s.keyframes = map_->keyframe_count();
   s.map_points = map_->map_point_count();
   s.loops_closed = loop_closer_->loops_closed();
+  s.dense = dense_->stats();
   return s;
 }
 

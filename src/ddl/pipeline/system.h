@@ -17,6 +17,7 @@
 // Thread-safety: process(), finish() and the accessors must be called from one thread.
 
 #include <atomic>
+#include <condition_variable>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -31,6 +32,8 @@
 #include "ddl/loop/loop_closer.h"
 #include "ddl/map/map.h"
 #include "ddl/mapping/local_mapper.h"
+#include "ddl/pipeline/dense_mapper.h"
+#include "ddl/pipeline/dynamic_front_end.h"
 #include "ddl/pipeline/system_config.h"
 #include "ddl/tracking/tracker.h"
 #include "ddl/vocabulary/bow_database.h"
@@ -48,6 +51,14 @@ struct SystemStatistics {
   std::size_t keyframes = 0;   // alive in the map at the end
   std::size_t map_points = 0;  // alive in the map at the end
   std::size_t loops_closed = 0;
+  std::size_t map_resets = 0;
+  DenseStats dense;
+};
+
+/// What process() reports about one frame.
+struct FrameOutcome {
+  tracking::TrackingResult tracking;
+  DynamicMasks masks;  // empty masks when dynamic removal is off
 };
 
 class System {
@@ -60,7 +71,8 @@ class System {
 
   /// Tracks one frame (frames in timestamp order). `dynamic_mask` (CV_8UC1, non-zero = pixel to
   /// ignore) may be empty.
-  tracking::TrackingResult process(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask = {});
+  /// Runs the dynamic front end (unless disabled), tracking, and hands new keyframes on.
+  FrameOutcome process(const io::RgbdFrame& frame);
 
   /// Ends the run: drains the queues, joins the workers, waits for a running global BA.
   /// Rethrows a worker's exception. Idempotent.
@@ -71,14 +83,19 @@ class System {
   SystemStatistics statistics() const;
   const TimingStats& timings() const { return timings_; }
   std::shared_ptr<const map::Map> map() const { return map_; }
+  const DenseMapper& dense_mapper() const { return *dense_; }
+  const DynamicFrontEnd& dynamic_front_end() const { return *dynamic_; }
+  const SystemConfig& config() const { return config_; }
 
  private:
   void mapping_worker();
   void loop_worker();
   void handle_keyframe_inline(const map::KeyFramePtr& keyframe);
+  DynamicMasks dynamic_masks(const io::RgbdFrame& frame);
+  std::optional<SE3> low_cost_pose() const;
   void rethrow_worker_error();
   void store_error(std::exception_ptr error);
-  void shutdown_workers();
+  void shutdown_workers(bool wait_for_global_ba);
 
   SystemConfig config_;
   camera::PinholeCamera camera_;
@@ -88,6 +105,12 @@ class System {
   std::unique_ptr<tracking::Tracker> tracker_;
   std::unique_ptr<mapping::LocalMapper> mapper_;
   std::unique_ptr<loop::LoopCloser> loop_closer_;
+  std::unique_ptr<DynamicFrontEnd> dynamic_;
+  std::unique_ptr<DenseMapper> dense_;
+  // Low-cost pose: constant-velocity prediction from the last two tracked frames.
+  std::optional<SE3> last_T_c_w_;
+  std::optional<SE3> velocity_;  // T_c(k) c(k-1)
+  map::KeyFramePtr last_reference_;
   TimingStats timings_;
   SystemStatistics stats_;
 
@@ -96,6 +119,11 @@ class System {
   std::unique_ptr<BoundedQueue<map::KeyFramePtr>> loop_queue_;
   std::atomic<bool> abort_local_ba_{false};
   std::atomic<bool> mapper_busy_{false};
+  // Loop closing holds local mapping still while it moves the map (LoopCloser::MappingPause).
+  std::mutex pause_mutex_;
+  std::condition_variable pause_cv_;
+  int pause_requests_ = 0;
+  bool mapping_in_progress_ = false;
   std::thread mapping_thread_;
   std::thread loop_thread_;
   std::mutex error_mutex_;

@@ -1,28 +1,51 @@
 #pragma once
-// Configuration of the whole SLAM system: one struct per stage (each with its own defaults and
-// validate()). Read from YAML only by ddl::config (config/system_config.h); written back as the
-// effective configuration next to every run's outputs.
+// Configuration of the whole system: one struct per stage, each with its own defaults and
+// validate(). Read from YAML only by ddl::config (config/system_config.h), which also writes the
+// effective configuration next to every run's outputs and generates docs/configuration.md.
 
 #include <cstddef>
+#include <string>
 
-#include "ddl/features/orb_extractor.h"
+#include "ddl/dynamics/geometry_check.h"
 #include "ddl/loop/loop_closer.h"
 #include "ddl/mapping/local_mapper.h"
+#include "ddl/pipeline/dense_mapper.h"
+#include "ddl/segmentation/segmenter.h"
 #include "ddl/tracking/tracker.h"
 
 namespace ddl::pipeline {
 
 enum class RunMode {
   kDeterministic,  // all stages inline, reproducible (tests, evaluation)
-  kThreaded,       // mapping and loop closing in their own threads (live, throughput)
+  kThreaded,       // segmentation, mapping, loop closing and dense mapping in their own threads
+};
+
+/// The dynamic-content front end (DDL-SLAM sections III-B to III-D).
+struct DynamicConfig {
+  bool enabled = true;                 // false = the plain SLAM core (the paper's ORB-SLAM2 column)
+  bool use_segmentation = true;        // CNN masks of a-priori dynamic classes
+  bool use_geometry = true;            // multi-view geometry check against reference keyframes
+  int feature_border_px = 8;           // features this close to the mask are not used either
+  bool fallback_without_model = true;  // missing model file: warn and run geometry-only
+  std::size_t keyframe_depth_cache = 30;  // keyframe depth images kept for the geometry check
+  segmentation::SegmenterConfig segmentation;
+  dynamics::GeometryCheckConfig geometry;
+
+  void validate() const;
 };
 
 struct SystemConfig {
   RunMode mode = RunMode::kDeterministic;   // see System
   std::size_t keyframe_queue_capacity = 4;  // bounded queues between stages (threaded mode)
-  tracking::TrackerConfig tracking;         // ORB extraction settings live in tracking.orb
+  tracking::TrackerConfig tracking;         // includes ORB extraction (tracking.orb)
   mapping::LocalMapperConfig mapping;
   loop::LoopCloserConfig loop;
+  DynamicConfig dynamic;
+  DenseMapperConfig dense;
+  std::string shared_dir = "../shared";  // where relative model paths are looked up
+  std::string output_dir;                // where --save-masks / --save-inpainted write
+
+  bool save_masks = false;  // write <output_dir>/masks/<stamp>.png (combined dynamic mask)
 
   /// Throws ddl::ConfigError naming the key.
   void validate() const;

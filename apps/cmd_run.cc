@@ -1,0 +1,194 @@
+// `ddl_slam run`: SLAM on one RGB-D sequence, with outputs and evaluation.
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "ddl/config/camera_config.h"
+#include "ddl/config/dataset_config.h"
+#include "ddl/config/system_config.h"
+#include "ddl/core/error.h"
+#include "ddl/io/dataset_factory.h"
+#include "ddl/pipeline/sequence_runner.h"
+#include "ddl/pipeline/system.h"
+#include "ddl/vocabulary/vocabulary.h"
+
+namespace ddl::app {
+namespace {
+namespace fs = std::filesystem;
+
+struct RunArgs {
+  std::string sequence;
+  std::string camera;
+  std::string config_path;
+  std::string output_dir = "out/run";
+  std::string vocabulary_path;
+  std::string dataset_kind = "auto";
+  std::string associations = "auto";
+  std::string mode;
+  std::string shared_dir;
+  std::size_t max_frames = 0;
+  std::size_t first_frame = 0;
+  bool no_eval = false;
+  bool no_dynamic = false;
+  bool no_loop = false;
+  bool no_octomap = false;
+  bool no_inpainting = false;
+  bool save_masks = false;
+  bool save_inpainted = false;
+  std::string segmentation;
+};
+
+/// The default vocabulary: $DDL_VOCABULARY, else the one shipped in the source tree.
+std::string resolve_vocabulary(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("DDL_VOCABULARY"); env != nullptr && *env != '\0') return env;
+  return config::default_vocabulary_path();
+}
+
+int run(const RunArgs& args) {
+  const auto& stop = install_stop_handler();
+  const std::string shared_dir = resolve_shared_dir(args.shared_dir);
+
+  pipeline::SystemConfig config = args.config_path.empty()
+                                      ? pipeline::SystemConfig{}
+                                      : config::load_system_config(args.config_path);
+  if (!args.mode.empty()) config.mode = config::parse_run_mode(args.mode, "--mode");
+  if (args.no_dynamic) config.dynamic.enabled = false;
+  if (args.no_loop) config.loop.enabled = false;
+  if (args.no_octomap) config.dense.octomap_enabled = false;
+  if (args.no_inpainting) config.dense.inpainting_enabled = false;
+  if (args.save_masks) config.save_masks = true;
+  if (args.save_inpainted) {
+    config.dense.save_inpainted_dir = (fs::path(args.output_dir) / "inpainted").string();
+  }
+  if (!args.segmentation.empty()) {
+    config.dynamic.segmentation.backend =
+        config::parse_segmentation_backend(args.segmentation, "--segmentation");
+  }
+  config.shared_dir = shared_dir;
+  config.output_dir = args.output_dir;
+  config.validate();
+
+  io::DatasetOptions dataset_options;
+  dataset_options.kind = io::parse_dataset_kind(args.dataset_kind, "--dataset-kind");
+  dataset_options.sequence.association =
+      io::parse_association_source(args.associations, "--associations");
+  dataset_options.camera =
+      config::resolve_dataset_camera(args.sequence, args.camera, dataset_options.kind);
+  const std::unique_ptr<io::DatasetReader> dataset =
+      io::open_dataset(args.sequence, dataset_options);
+  spdlog::info("{}: {} frames, camera {}", dataset->name(), dataset->size(),
+               dataset->camera().name);
+
+  const std::string vocabulary_path = resolve_vocabulary(args.vocabulary_path);
+  Stopwatch load_watch;
+  auto vocabulary =
+      std::make_shared<const vocabulary::Vocabulary>(vocabulary::Vocabulary::load(vocabulary_path));
+  spdlog::info("vocabulary {}: {} words, loaded in {:.0f} ms", vocabulary_path,
+               vocabulary->word_count(), load_watch.elapsed_ms());
+
+  fs::create_directories(args.output_dir);
+  {
+    const fs::path config_out = fs::path(args.output_dir) / "config.yaml";
+    std::ofstream file(config_out);
+    file << config::system_config_to_yaml(config);
+    if (!file)
+      throw InputError::at(config_out.string(), "cannot write the effective configuration");
+    const fs::path camera_out = fs::path(args.output_dir) / "camera.yaml";
+    std::ofstream camera_file(camera_out);
+    camera_file << config::camera_to_yaml(dataset->camera());
+  }
+
+  pipeline::System system(config, dataset->camera(), vocabulary);
+
+  pipeline::RunOptions run_options;
+  run_options.output_dir = args.output_dir;
+  run_options.first_frame = args.first_frame;
+  run_options.max_frames = args.max_frames;
+  run_options.evaluate = !args.no_eval;
+  Progress progress("run " + dataset->name(),
+                    std::min(dataset->size() - std::min(dataset->size(), args.first_frame),
+                             args.max_frames == 0 ? dataset->size() : args.max_frames));
+  const pipeline::RunOutcome outcome = pipeline::run_sequence(
+      *dataset, system, run_options, &stop,
+      [&](std::size_t done, std::size_t, const std::string& note) { progress.update(done, note); });
+  progress.finish();
+
+  const auto& s = outcome.statistics;
+  std::printf(
+      "frames %zu, tracked %zu, lost %zu, keyframes %zu, map points %zu, loops %zu, "
+      "relocalizations %zu\n",
+      s.frames, s.frames_tracked, s.frames_lost, s.keyframes, s.map_points, s.loops_closed,
+      s.relocalizations);
+  if (outcome.summary.contains("evaluation")) {
+    const auto& ev = outcome.summary["evaluation"];
+    std::printf("ATE RMSE %.4f m, RPE %.4f m/s %.3f deg/s, tracked ratio %.3f\n",
+                ev["ate"]["rmse_m"].get<double>(), ev["rpe"]["trans_rmse_m_per_s"].get<double>(),
+                ev["rpe"]["rot_rmse_deg_per_s"].get<double>(), ev["tracked_ratio"].get<double>());
+  }
+  std::printf("outputs in %s\n", args.output_dir.c_str());
+  return outcome.interrupted ? kInterrupted : kOk;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "Run DDL-SLAM on an RGB-D sequence in the TUM layout (TUM RGB-D, Bonn RGB-D Dynamic, or "
+      "one written by `ddl_slam synth`). Writes CameraTrajectory.txt, KeyFrameTrajectory.txt "
+      "(TUM format), summary.json, config.yaml, the octree map (map.ot/map.bt/map.ply + PNG "
+      "renderings) and, when the sequence has groundtruth.txt, eval/ with ATE/RPE and plots. "
+      "Ctrl-C stops cleanly and saves what was computed.");
+  cmd->add_option("sequence", args->sequence, "Sequence folder (rgb.txt, depth.txt, ...)")
+      ->required();
+  cmd->add_option("--camera", args->camera,
+                  "Camera: tum1, tum2, tum3, bonn, synthetic or a YAML file; default: from the "
+                  "folder name (freiburg1/2/3, rgbd_bonn_*) or <sequence>/camera.yaml");
+  cmd->add_option("--config", args->config_path,
+                  "System settings (YAML; every key in docs/configuration.md). Unknown keys are "
+                  "errors");
+  cmd->add_option("--out", args->output_dir, "Output folder")->capture_default_str();
+  cmd->add_option("--vocabulary", args->vocabulary_path,
+                  "ORB vocabulary file; default $DDL_VOCABULARY or the one shipped in vocab/");
+  cmd->add_option("--mode", args->mode,
+                  "deterministic (all stages inline, reproducible) or threaded (stages in their "
+                  "own threads, for speed); default from the settings (deterministic)")
+      ->check(CLI::IsMember({"deterministic", "threaded"}));
+  cmd->add_option("--dataset-kind", args->dataset_kind, "auto, tum or bonn")
+      ->check(CLI::IsMember({"auto", "tum", "bonn"}))
+      ->capture_default_str();
+  cmd->add_option("--associations", args->associations,
+                  "auto (associations.txt if present, else associate rgb.txt/depth.txt as TUM's "
+                  "associate.py), file, or timestamps")
+      ->check(CLI::IsMember({"auto", "file", "timestamps"}))
+      ->capture_default_str();
+  cmd->add_option("--segmentation", args->segmentation,
+                  "Segmentation backend: onnx (default model in the shared folder), folder, none");
+  cmd->add_option("--shared-dir", args->shared_dir,
+                  "Shared data folder (models); default $DDL_SHARED_DIR or ../shared");
+  cmd->add_option("--first-frame", args->first_frame, "Skip the frames before this index");
+  cmd->add_option("--max-frames", args->max_frames, "Process at most this many frames (0 = all)");
+  cmd->add_flag("--no-dynamic", args->no_dynamic,
+                "Plain SLAM core without dynamic-content removal (the paper's ORB-SLAM2 column)");
+  cmd->add_flag("--no-loop", args->no_loop, "Disable loop closing");
+  cmd->add_flag("--no-octomap", args->no_octomap, "Do not build the octree map");
+  cmd->add_flag("--no-inpainting", args->no_inpainting, "Do not repair keyframes");
+  cmd->add_flag("--save-masks", args->save_masks, "Write the dynamic masks to <out>/masks/");
+  cmd->add_flag("--save-inpainted", args->save_inpainted,
+                "Write repaired keyframes to <out>/inpainted/");
+  cmd->add_flag("--no-eval", args->no_eval, "Skip the evaluation against groundtruth.txt");
+  cmd->callback([args, &exit_code] { exit_code = run_guarded([&] { return run(*args); }); });
+}
+
+}  // namespace ddl::app

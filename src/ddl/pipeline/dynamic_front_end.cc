@@ -1,0 +1,89 @@
+#include "ddl/pipeline/dynamic_front_end.h"
+
+#include <spdlog/spdlog.h>
+
+#include "ddl/core/error.h"
+#include "ddl/core/timing.h"
+#include "ddl/dynamics/mask_fusion.h"
+
+namespace ddl::pipeline {
+
+void DynamicConfig::validate() const {
+  if (feature_border_px < 0 || feature_border_px > 50) {
+    throw ConfigError::for_key("dynamic.feature_border_px", "must be in 0..50");
+  }
+  if (keyframe_depth_cache < 1) {
+    throw ConfigError::for_key("dynamic.keyframe_depth_cache", "must be >= 1");
+  }
+  if (enabled && use_segmentation) segmentation.validate();
+  if (enabled && use_geometry) geometry.validate();
+}
+
+DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::PinholeCamera& camera,
+                                 const std::string& shared_dir)
+    : config_(config), camera_(camera) {
+  if (!config_.enabled || !config_.use_segmentation) return;
+  try {
+    segmenter_ = segmentation::make_segmenter(config_.segmentation, shared_dir);
+  } catch (const InputError& e) {
+    const bool missing = std::string(e.what()).find("not found") != std::string::npos;
+    if (!missing || !config_.fallback_without_model) throw;
+    spdlog::warn(
+        "{}; running with the multi-view geometry check only (set "
+        "dynamic.segmentation.model_path or --shared-dir)",
+        e.what());
+  }
+}
+
+std::string DynamicFrontEnd::segmenter_description() const {
+  return segmenter_ ? segmenter_->description() : "none";
+}
+
+cv::Mat DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame, double* elapsed_ms) {
+  if (!segmenter_) return {};
+  Stopwatch watch;
+  cv::Mat mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+  if (elapsed_ms != nullptr) *elapsed_ms = watch.elapsed_ms();
+  return mask;
+}
+
+cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                                       const std::vector<map::KeyFramePtr>& references,
+                                       dynamics::GeometryCheckStats* stats) {
+  if (!config_.enabled || !config_.use_geometry || references.empty()) return {};
+  std::vector<dynamics::ReferenceView> views;
+  for (const map::KeyFramePtr& kf : references) {
+    if (static_cast<int>(views.size()) >= config_.geometry.max_reference_keyframes) break;
+    dynamics::ReferenceView view;
+    view.T_w_c = kf->T_w_c();
+    const map::FrameFeatures& f = kf->features();
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (!f.has_depth(i)) continue;
+      view.pixels.push_back(f.keypoints[i].pt);
+      view.depth_m.push_back(f.depth_m[i]);
+    }
+    {
+      std::lock_guard lock(cache_mutex_);
+      auto it = depth_cache_.find(kf->id());
+      if (it != depth_cache_.end()) view.depth_image_m = it->second;
+    }
+    views.push_back(std::move(view));
+  }
+  return dynamics::geometry_dynamic_mask(frame.depth_m, T_c_w, views, camera_, config_.geometry,
+                                         stats);
+}
+
+void DynamicFrontEnd::finish_masks(DynamicMasks& masks) const {
+  masks.combined = dynamics::combine_masks(masks.cnn, masks.geometry);
+  masks.exclusion = dynamics::feature_exclusion_mask(masks.combined, config_.feature_border_px);
+}
+
+void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m) {
+  if (!config_.enabled || !config_.use_geometry) return;
+  std::lock_guard lock(cache_mutex_);
+  depth_cache_[keyframe->id()] = depth_m;
+  while (depth_cache_.size() > config_.keyframe_depth_cache)
+    depth_cache_.erase(depth_cache_.begin());
+}
+
+}  // namespace ddl::pipeline

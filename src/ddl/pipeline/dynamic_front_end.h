@@ -1,0 +1,69 @@
+#pragma once
+// The dynamic-content front end (DDL-SLAM sections III-B to III-D, Algorithm 1): the CNN mask of
+// a-priori dynamic classes, the multi-view geometry mask against reference keyframes at a
+// low-cost pose, their union, and the exclusion mask handed to ORB extraction (the union grown by
+// a border, so features on object edges are not used either).
+// Thread-safety: one instance per pipeline; cnn_mask() may run on a segmentation thread while the
+// other methods run on the tracking thread (they share no state but the keyframe depth cache,
+// which is locked).
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "ddl/camera/pinhole_camera.h"
+#include "ddl/core/se3.h"
+#include "ddl/dynamics/geometry_check.h"
+#include "ddl/io/rgbd_frame.h"
+#include "ddl/map/keyframe.h"
+#include "ddl/pipeline/system_config.h"
+#include "ddl/segmentation/segmenter.h"
+
+namespace ddl::pipeline {
+
+struct DynamicMasks {
+  cv::Mat cnn;        // CV_8UC1 255 = dynamic class (empty when segmentation is off)
+  cv::Mat geometry;   // CV_8UC1 255 = moved according to the geometry check (may be empty)
+  cv::Mat combined;   // union (empty when both are)
+  cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
+  dynamics::GeometryCheckStats geometry_stats;
+  double segmentation_ms = 0.0;
+  double geometry_ms = 0.0;
+};
+
+class DynamicFrontEnd {
+ public:
+  /// Creates the segmenter. A missing model file with fallback_without_model gives a warning
+  /// and geometry-only operation; an invalid model file throws ddl::InputError.
+  DynamicFrontEnd(const DynamicConfig& config, const camera::PinholeCamera& camera,
+                  const std::string& shared_dir);
+
+  bool enabled() const { return config_.enabled; }
+  bool has_segmenter() const { return segmenter_ != nullptr; }
+  std::string segmenter_description() const;
+
+  /// CNN mask of one frame (empty when segmentation is off).
+  cv::Mat cnn_mask(const io::RgbdFrame& frame, double* elapsed_ms = nullptr);
+
+  /// Geometry mask at pose T_c_w against `references` (best overlap first).
+  cv::Mat geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                        const std::vector<map::KeyFramePtr>& references,
+                        dynamics::GeometryCheckStats* stats);
+
+  /// Union and exclusion mask.
+  void finish_masks(DynamicMasks& masks) const;
+
+  /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
+  void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m);
+
+ private:
+  DynamicConfig config_;
+  camera::PinholeCamera camera_;
+  std::unique_ptr<segmentation::Segmenter> segmenter_;
+  std::mutex cache_mutex_;
+  std::map<map::KeyFrameId, cv::Mat> depth_cache_;
+};
+
+}  // namespace ddl::pipeline

@@ -1,0 +1,89 @@
+#include "ddl/config/system_config.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+
+#include "ddl/core/error.h"
+
+namespace ddl::config {
+namespace {
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SystemConfig, DefaultsRoundTripThroughYaml) {
+  pipeline::SystemConfig defaults;
+  const std::string yaml = system_config_to_yaml(defaults);
+  const pipeline::SystemConfig back = parse_system_config(yaml, "defaults.yaml");
+  EXPECT_EQ(system_config_to_yaml(back), yaml);
+}
+
+TEST(SystemConfig, ValuesAreReadIntoTheStructs) {
+  const auto config = parse_system_config(
+      "mode: threaded\n"
+      "tracking:\n"
+      "  orb:\n"
+      "    num_features: 1500\n"
+      "  matching:\n"
+      "    reference_bow_ratio: 0.6\n"
+      "dynamic:\n"
+      "  enabled: false\n"
+      "  segmentation:\n"
+      "    backend: none\n"
+      "    dynamic_classes: [person, dog]\n"
+      "dense:\n"
+      "  octree:\n"
+      "    resolution_m: 0.1\n",
+      "settings.yaml");
+  EXPECT_EQ(config.mode, pipeline::RunMode::kThreaded);
+  EXPECT_EQ(config.tracking.orb.num_features, 1500);
+  EXPECT_FLOAT_EQ(config.tracking.matching.reference_bow_ratio, 0.6f);
+  EXPECT_FALSE(config.dynamic.enabled);
+  EXPECT_EQ(config.dynamic.segmentation.backend, segmentation::Backend::kNone);
+  EXPECT_EQ(config.dynamic.segmentation.dynamic_classes,
+            (std::vector<std::string>{"person", "dog"}));
+  EXPECT_DOUBLE_EQ(config.dense.octree.resolution_m, 0.1);
+  // Untouched keys keep their defaults.
+  EXPECT_EQ(config.tracking.orb.num_levels, 8);
+}
+
+TEST(SystemConfig, UnknownKeyNamesFileLineAndKey) {
+  const std::string msg = message_of(
+      [] { parse_system_config("tracking:\n  orb:\n    num_featurs: 10\n", "typo.yaml"); });
+  EXPECT_NE(msg.find("typo.yaml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tracking.orb.num_featurs"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("3"), std::string::npos) << msg;
+}
+
+TEST(SystemConfig, InvalidValueNamesTheKey) {
+  const std::string msg = message_of(
+      [] { parse_system_config("tracking:\n  orb:\n    num_features: -5\n", "bad.yaml"); });
+  EXPECT_NE(msg.find("orb.num_features"), std::string::npos) << msg;
+  const std::string enum_msg = message_of([] { parse_system_config("mode: fast\n", "bad.yaml"); });
+  EXPECT_NE(enum_msg.find("mode"), std::string::npos) << enum_msg;
+  EXPECT_NE(enum_msg.find("deterministic"), std::string::npos) << enum_msg;
+  const std::string type_msg =
+      message_of([] { parse_system_config("keyframe_queue_capacity: lots\n", "bad.yaml"); });
+  EXPECT_NE(type_msg.find("keyframe_queue_capacity"), std::string::npos) << type_msg;
+}
+
+TEST(SystemConfig, ReferenceListsEveryNestedKey) {
+  const std::string md = system_config_reference_markdown();
+  for (const char* key :
+       {"`mode`", "`tracking.orb.num_features`", "`mapping.local_ba`", "`loop.enabled`",
+        "`dynamic.geometry.max_parallax_deg`", "`dense.inpainting.num_keyframes`",
+        "`dense.octree.resolution_m`", "`dynamic.segmentation.dynamic_classes`"}) {
+    EXPECT_NE(md.find(key), std::string::npos) << key;
+  }
+}
+
+}  // namespace
+}  // namespace ddl::config
