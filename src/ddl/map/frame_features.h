@@ -3,7 +3,6 @@
 // the tracking frame and the keyframe made from it (ARCHITECTURE.md section 3).
 
 #include <opencv2/core.hpp>
-
 #include <vector>
 
 #include "ddl/core/types.h"

@@ -10,13 +10,31 @@ namespace {
 constexpr int kCovisibilityThreshold = 15;  // ORB-SLAM2: links need >= 15 shared points
 }  // namespace
 
-KeyFrame::KeyFrame(KeyFrameId id, double timestamp_s,
-                   std::shared_ptr<const FrameFeatures> features, const SE3& T_c_w)
+KeyFrame::KeyFrame(KeyFrameId id, double timestamp_s, std::shared_ptr<const FrameFeatures> features,
+                   const SE3& T_c_w)
     : id_(id),
       timestamp_s_(timestamp_s),
       features_(std::move(features)),
       T_c_w_(T_c_w),
       points_(features_->size()) {}
+
+const vocabulary::BowVector& KeyFrame::bow() const {
+  if (features_->has_bow()) return features_->bow;
+  std::lock_guard lock(bow_mutex_);
+  return bow_ ? bow_->bow : features_->bow;
+}
+
+const vocabulary::FeatureVector& KeyFrame::feature_vector() const {
+  if (features_->has_bow()) return features_->feature_vector;
+  std::lock_guard lock(bow_mutex_);
+  return bow_ ? bow_->feature_vector : features_->feature_vector;
+}
+
+void KeyFrame::set_bow(vocabulary::BowVector bow, vocabulary::FeatureVector feature_vector) {
+  if (features_->has_bow()) return;
+  std::lock_guard lock(bow_mutex_);
+  if (!bow_) bow_ = std::make_unique<const Bow>(Bow{std::move(bow), std::move(feature_vector)});
+}
 
 SE3 KeyFrame::T_c_w() const {
   std::lock_guard lock(pose_mutex_);
@@ -49,9 +67,8 @@ std::vector<MapPointPtr> KeyFrame::map_point_set() const {
   for (auto& p : all) {
     if (p && !p->is_bad()) out.push_back(std::move(p));
   }
-  std::sort(out.begin(), out.end(), [](const MapPointPtr& a, const MapPointPtr& b) {
-    return a->id() < b->id();
-  });
+  std::sort(out.begin(), out.end(),
+            [](const MapPointPtr& a, const MapPointPtr& b) { return a->id() < b->id(); });
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
@@ -151,12 +168,19 @@ void KeyFrame::erase_connection(KeyFrameId other_id) {
 }
 
 std::vector<std::shared_ptr<KeyFrame>> KeyFrame::best_covisibles(std::size_t n) const {
-  std::lock_guard lock(graph_mutex_);
+  std::vector<std::shared_ptr<KeyFrame>> linked;
+  {
+    std::lock_guard lock(graph_mutex_);
+    linked.reserve(ordered_.size());
+    for (const auto& [weight, id] : ordered_) {
+      if (auto kf = links_.at(id).keyframe.lock()) linked.push_back(std::move(kf));
+    }
+  }
+  // is_bad() locks the other keyframe: only after releasing our own lock (locking rule above).
   std::vector<std::shared_ptr<KeyFrame>> out;
-  for (const auto& [weight, id] : ordered_) {
+  for (auto& kf : linked) {
     if (out.size() >= n) break;
-    auto kf = links_.at(id).keyframe.lock();
-    if (kf && !kf->is_bad()) out.push_back(std::move(kf));
+    if (!kf->is_bad()) out.push_back(std::move(kf));
   }
   return out;
 }
@@ -166,12 +190,17 @@ std::vector<std::shared_ptr<KeyFrame>> KeyFrame::covisibles() const {
 }
 
 std::vector<std::shared_ptr<KeyFrame>> KeyFrame::covisibles_with_min_weight(int min_weight) const {
-  std::lock_guard lock(graph_mutex_);
+  std::vector<std::shared_ptr<KeyFrame>> linked;
+  {
+    std::lock_guard lock(graph_mutex_);
+    for (const auto& [weight, id] : ordered_) {
+      if (weight < min_weight) break;
+      if (auto kf = links_.at(id).keyframe.lock()) linked.push_back(std::move(kf));
+    }
+  }
   std::vector<std::shared_ptr<KeyFrame>> out;
-  for (const auto& [weight, id] : ordered_) {
-    if (weight < min_weight) break;
-    auto kf = links_.at(id).keyframe.lock();
-    if (kf && !kf->is_bad()) out.push_back(std::move(kf));
+  for (auto& kf : linked) {
+    if (!kf->is_bad()) out.push_back(std::move(kf));
   }
   return out;
 }

@@ -29,6 +29,17 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   const FrameFeatures& features() const { return *features_; }
   const std::shared_ptr<const FrameFeatures>& features_ptr() const { return features_; }
 
+  // --- bag of words ---------------------------------------------------------------------------
+  /// BoW vector and direct index of the keyframe's features: those of features() when the
+  /// tracker computed them, else the ones given to set_bow() (local mapping computes them once
+  /// for keyframes created without). Empty until either exists. Set once and never replaced, so
+  /// the references stay valid for the keyframe's lifetime.
+  const vocabulary::BowVector& bow() const;
+  const vocabulary::FeatureVector& feature_vector() const;
+  bool has_bow() const { return !bow().empty(); }
+  /// Stores the BoW of a keyframe whose features came without one; no-op when it has one.
+  void set_bow(vocabulary::BowVector bow, vocabulary::FeatureVector feature_vector);
+
   // --- pose -----------------------------------------------------------------------------------
   SE3 T_c_w() const;
   SE3 T_w_c() const;
@@ -93,6 +104,13 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   const KeyFrameId id_;
   const double timestamp_s_;
   const std::shared_ptr<const FrameFeatures> features_;
+
+  struct Bow {
+    vocabulary::BowVector bow;
+    vocabulary::FeatureVector feature_vector;
+  };
+  mutable std::mutex bow_mutex_;
+  std::unique_ptr<const Bow> bow_;  // set once by set_bow()
 
   mutable std::mutex pose_mutex_;
   SE3 T_c_w_;

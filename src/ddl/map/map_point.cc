@@ -8,6 +8,11 @@
 #include "ddl/map/keyframe.h"
 
 namespace ddl::map {
+namespace {
+// ORB-SLAM2 widens the scale-invariance range by these factors when testing visibility.
+constexpr double kMinDistanceMargin = 0.8;
+constexpr double kMaxDistanceMargin = 1.2;
+}  // namespace
 
 MapPoint::MapPoint(MapPointId id, const Vec3d& p_w,
                    const std::shared_ptr<KeyFrame>& reference_keyframe)
@@ -26,8 +31,8 @@ void MapPoint::set_position_w(const Vec3d& p_w) {
   p_w_ = p_w;
 }
 
-void MapPoint::add_observation(const std::shared_ptr<KeyFrame>& keyframe,
-                               std::size_t feature_index, bool stereo) {
+void MapPoint::add_observation(const std::shared_ptr<KeyFrame>& keyframe, std::size_t feature_index,
+                               bool stereo) {
   std::lock_guard lock(mutex_);
   if (observations_.count(keyframe->id()) != 0) return;
   observations_[keyframe->id()] = Obs{keyframe, feature_index, stereo};
@@ -90,8 +95,8 @@ void MapPoint::compute_distinctive_descriptor() {
   std::vector<cv::Mat> descriptors;
   for (const Observation& obs : observations()) {
     if (obs.keyframe->is_bad()) continue;
-    descriptors.push_back(obs.keyframe->features().descriptors.row(
-        static_cast<int>(obs.feature_index)));
+    descriptors.push_back(
+        obs.keyframe->features().descriptors.row(static_cast<int>(obs.feature_index)));
   }
   if (descriptors.empty()) return;
   const std::size_t n = descriptors.size();
@@ -156,23 +161,48 @@ Vec3d MapPoint::normal_w() const {
 
 double MapPoint::min_distance() const {
   std::lock_guard lock(mutex_);
-  return 0.8 * min_distance_;
+  return kMinDistanceMargin * min_distance_;
 }
 
 double MapPoint::max_distance() const {
   std::lock_guard lock(mutex_);
-  return 1.2 * max_distance_;
+  return kMaxDistanceMargin * max_distance_;
 }
 
-int MapPoint::predict_scale(double distance_m, const features::ScalePyramid& pyramid) const {
-  double ratio = 0.0;
-  {
-    std::lock_guard lock(mutex_);
-    ratio = max_distance_ / distance_m;
-  }
+namespace {
+int predict_level(double level0_distance_m, double distance_m,
+                  const features::ScalePyramid& pyramid) {
+  const double ratio = level0_distance_m / distance_m;
   if (ratio <= 0.0) return 0;
   int level = static_cast<int>(std::ceil(std::log(ratio) / pyramid.log_scale_factor));
   return std::clamp(level, 0, pyramid.num_levels - 1);
+}
+}  // namespace
+
+int MapPoint::predict_scale(double distance_m, const features::ScalePyramid& pyramid) const {
+  double level0_distance_m = 0.0;
+  {
+    std::lock_guard lock(mutex_);
+    level0_distance_m = max_distance_;
+  }
+  return predict_level(level0_distance_m, distance_m, pyramid);
+}
+
+int MapPoint::ViewSummary::predict_scale(double distance_m,
+                                         const features::ScalePyramid& pyramid) const {
+  return predict_level(level0_distance_m, distance_m, pyramid);
+}
+
+MapPoint::ViewSummary MapPoint::view_summary() const {
+  std::lock_guard lock(mutex_);
+  ViewSummary s;
+  s.p_w = p_w_;
+  s.normal_w = normal_w_;
+  s.min_distance = kMinDistanceMargin * min_distance_;
+  s.max_distance = kMaxDistanceMargin * max_distance_;
+  s.bad = bad_;
+  s.level0_distance_m = max_distance_;
+  return s;
 }
 
 void MapPoint::increase_visible(int n) {

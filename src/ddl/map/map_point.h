@@ -5,12 +5,11 @@
 // Thread-safety: every method locks the point's own mutex; any thread may call any method.
 // Observations hold keyframes weakly; the Map owns entities.
 
-#include <opencv2/core.hpp>
-
 #include <cstddef>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "ddl/core/types.h"
@@ -63,6 +62,20 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   double max_distance() const;
   /// Pyramid level at which the point should be seen from `distance_m`.
   int predict_scale(double distance_m, const features::ScalePyramid& pyramid) const;
+
+  /// What projection matching reads about a point, copied under one lock (tracking tests
+  /// thousands of points per frame). Fields equal the accessors of the same name.
+  struct ViewSummary {
+    Vec3d p_w = Vec3d::Zero();
+    Vec3d normal_w = Vec3d::Zero();
+    double min_distance = 0.0;
+    double max_distance = 0.0;
+    bool bad = false;
+    double level0_distance_m = 0.0;  // unscaled distance behind predict_scale()
+    /// The same as MapPoint::predict_scale at the time of the copy.
+    int predict_scale(double distance_m, const features::ScalePyramid& pyramid) const;
+  };
+  ViewSummary view_summary() const;
 
   void increase_visible(int n = 1);
   void increase_found(int n = 1);

@@ -1,0 +1,339 @@
+#include "ddl/tracking/tracker.h"
+
+#include <spdlog/spdlog.h>
+
+#include "ddl/core/error.h"
+#include "ddl/core/timing.h"
+#include "ddl/tracking/keyframe_creation.h"
+#include "ddl/tracking/keyframe_decision.h"
+
+namespace ddl::tracking {
+namespace {
+
+const TrackerConfig& validated(const TrackerConfig& config) {
+  config.validate();
+  return config;
+}
+
+template <typename T>
+std::shared_ptr<T> require_non_null(std::shared_ptr<T> p, const char* what) {
+  if (!p) throw Error(std::string("Tracker: ") + what + " must not be null");
+  return p;
+}
+
+}  // namespace
+
+std::string_view to_string(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized:
+      return "not_initialized";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kLost:
+      return "lost";
+    case TrackingState::kRelocalized:
+      return "relocalized";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(TrackingMethod method) {
+  switch (method) {
+    case TrackingMethod::kNone:
+      return "none";
+    case TrackingMethod::kInitialization:
+      return "initialization";
+    case TrackingMethod::kMotionModel:
+      return "motion_model";
+    case TrackingMethod::kReferenceKeyFrame:
+      return "reference_keyframe";
+    case TrackingMethod::kRelocalization:
+      return "relocalization";
+  }
+  return "unknown";
+}
+
+Tracker::Tracker(const TrackerConfig& config, const camera::PinholeCamera& camera,
+                 std::shared_ptr<map::Map> map,
+                 std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
+                 std::shared_ptr<vocabulary::BowDatabase> keyframe_database)
+    : config_(validated(config)),
+      map_(require_non_null(std::move(map), "map")),
+      vocabulary_(require_non_null(std::move(vocabulary), "vocabulary")),
+      database_(std::move(keyframe_database)),
+      builder_(camera, config_.orb, config_.frame),
+      estimator_(*builder_.geometry(), config_.optimizer),
+      local_map_(config_.matching),
+      relocalizer_(config_.relocalization, config_.frame.bow_levels_up, map_, vocabulary_,
+                   database_) {}
+
+TrackingResult Tracker::track(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask,
+                              const MappingStatus& mapping) {
+  const Stopwatch total;
+  TrackingResult result;
+  result.frame_index = frame.index;
+  result.timestamp_s = frame.timestamp_s;
+
+  const Stopwatch features_watch;
+  Frame current = builder_.build(frame, dynamic_mask, next_frame_id_++);
+  result.timings.features_ms = features_watch.elapsed_ms();
+  result.num_features = current.size();
+
+  map_->read_consistent([&] { track_locked(current, mapping, result); });
+  last_frame_ = std::move(current);
+  result.timings.total_ms = total.elapsed_ms();
+  return result;
+}
+
+void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingResult& result) {
+  Stopwatch stage;
+  if (state_.load() == TrackingState::kNotInitialized) {
+    const bool ok = initialize(frame, result);
+    result.timings.initial_pose_ms = stage.elapsed_ms();
+    if (ok) {
+      state_ = TrackingState::kOk;
+      result.state = TrackingState::kOk;
+      result.method = TrackingMethod::kInitialization;
+      result.T_w_c = frame.T_w_c();
+      result.reference_keyframe = frame.reference_keyframe();
+      result.num_inliers = frame.matched_count();
+      trajectory_.add_tracked(frame.timestamp_s(), frame.T_c_w(), frame.reference_keyframe());
+      last_T_c_r_ = SE3();
+      last_frame_tracked_ = true;
+    } else {
+      result.state = TrackingState::kNotInitialized;
+      trajectory_.add_lost(frame.timestamp_s());
+      last_frame_tracked_ = false;
+    }
+    return;
+  }
+
+  bool ok = false;
+  const bool was_lost = state_.load() == TrackingState::kLost;
+  if (!was_lost) {
+    refresh_last_frame();
+    if (!motion_model_.valid() || frame.id() < last_relocalization_frame_id_ + 2) {
+      result.method = TrackingMethod::kReferenceKeyFrame;
+      ok = track_reference_keyframe(frame);
+    } else {
+      result.method = TrackingMethod::kMotionModel;
+      ok = track_motion_model(frame);
+      if (!ok) {
+        result.method = TrackingMethod::kReferenceKeyFrame;
+        ok = track_reference_keyframe(frame);
+      }
+    }
+  } else {
+    result.method = TrackingMethod::kRelocalization;
+    ok = relocalize(frame);
+  }
+  result.timings.initial_pose_ms = stage.elapsed_ms();
+
+  frame.set_reference_keyframe(reference_keyframe_);
+  if (ok) {
+    stage.reset();
+    ok = track_local_map(frame, result.timings);
+    result.timings.local_map_ms = stage.elapsed_ms();
+  }
+
+  if (!ok) {
+    state_ = TrackingState::kLost;
+    result.state = TrackingState::kLost;
+    result.method = TrackingMethod::kNone;
+    motion_model_.reset();
+    last_frame_tracked_ = false;
+    trajectory_.add_lost(frame.timestamp_s());
+    if (!was_lost) spdlog::info("tracking lost at frame {}", result.frame_index);
+    if (config_.reset_when_lost_max_keyframes >= 0 &&
+        map_->keyframe_count() <= static_cast<std::size_t>(config_.reset_when_lost_max_keyframes)) {
+      reset(result);
+    }
+    return;
+  }
+
+  const TrackingState state = was_lost ? TrackingState::kRelocalized : TrackingState::kOk;
+  if (was_lost) spdlog::info("relocalized at frame {}", result.frame_index);
+  state_ = state;
+  result.state = state;
+  if (last_frame_tracked_ && last_frame_.has_pose()) {
+    motion_model_.update(frame.T_c_w(), last_frame_.T_c_w());
+  } else {
+    motion_model_.reset();
+  }
+  // Matches to points nobody observes (none are made in SLAM mode, but fusion may leave some)
+  // do not go into keyframes.
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const map::MapPointPtr& p = frame.map_point(i);
+    if (p && p->num_observations() < 1) frame.clear_map_point(i);
+  }
+
+  stage.reset();
+  maybe_create_keyframe(frame, mapping, result);
+  result.timings.keyframe_ms = stage.elapsed_ms();
+
+  // Outliers went into the keyframe (local BA decides about them) but the next frame must not
+  // be predicted from them.
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (frame.map_point(i) && frame.is_outlier(i)) frame.clear_map_point(i);
+  }
+
+  result.T_w_c = frame.T_w_c();
+  result.num_inliers = local_map_inliers_;
+  result.reference_keyframe = frame.reference_keyframe();
+  trajectory_.add_tracked(frame.timestamp_s(), frame.T_c_w(), frame.reference_keyframe());
+  last_T_c_r_ = frame.T_c_w() * frame.reference_keyframe()->T_w_c();
+  last_frame_tracked_ = true;
+}
+
+bool Tracker::initialize(Frame& frame, TrackingResult& result) {
+  if (frame.size() <= static_cast<std::size_t>(config_.init_min_features)) return false;
+  frame.set_T_c_w(SE3());
+  map::KeyFramePtr keyframe =
+      create_initial_keyframe(frame, *map_, *vocabulary_, config_.frame.bow_levels_up);
+  reference_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id();
+  local_map_.clear();
+  motion_model_.reset();
+  result.new_keyframe = keyframe;
+  spdlog::info("map initialized at frame {} with {} points", result.frame_index,
+               frame.matched_count());
+  return true;
+}
+
+void Tracker::refresh_last_frame() {
+  if (!last_frame_tracked_ || !last_frame_.valid()) return;
+  for (std::size_t i = 0; i < last_frame_.size(); ++i) {
+    const map::MapPointPtr& p = last_frame_.map_point(i);
+    if (!p) continue;
+    if (map::MapPointPtr replacement = p->replaced_by()) {
+      last_frame_.set_map_point(i, std::move(replacement));
+    }
+  }
+  if (const map::KeyFramePtr& reference = last_frame_.reference_keyframe()) {
+    last_frame_.set_T_c_w(resolve_relative_pose(last_T_c_r_, reference));
+  }
+}
+
+bool Tracker::track_reference_keyframe(Frame& frame) {
+  if (!reference_keyframe_ || !last_frame_.has_pose()) return false;
+  frame.compute_bow(*vocabulary_, config_.frame.bow_levels_up);
+  std::vector<map::MapPointPtr> matches;
+  const int count = matcher_.match_bow(*reference_keyframe_, frame,
+                                       config_.matching.reference_bow_ratio, matches);
+  if (count < config_.matching.reference_min_matches) return false;
+  frame.set_map_points(std::move(matches));
+  frame.set_T_c_w(last_frame_.T_c_w());
+  estimator_.optimize(frame);
+  return discard_outliers(frame) >= config_.matching.min_map_matches;
+}
+
+bool Tracker::track_motion_model(Frame& frame) {
+  frame.set_T_c_w(motion_model_.predict(last_frame_.T_c_w()));
+  frame.clear_map_points();
+  const float radius = config_.matching.motion_search_radius_px;
+  int count = matcher_.match_last_frame(frame, last_frame_, radius);
+  if (count < config_.matching.motion_min_matches) {
+    frame.clear_map_points();
+    count = matcher_.match_last_frame(frame, last_frame_, 2.0f * radius);
+  }
+  if (count < config_.matching.motion_min_matches) return false;
+  estimator_.optimize(frame);
+  return discard_outliers(frame) >= config_.matching.min_map_matches;
+}
+
+bool Tracker::track_local_map(Frame& frame, TrackingTimings& timings) {
+  Stopwatch watch;
+  if (map::KeyFramePtr reference = local_map_.update(frame))
+    reference_keyframe_ = std::move(reference);
+  frame.set_reference_keyframe(reference_keyframe_);
+  timings.local_map_update_ms = watch.elapsed_ms();
+  watch.reset();
+  const bool just_relocalized = frame.id() < last_relocalization_frame_id_ + 2;
+  const float radius = just_relocalized ? config_.matching.local_search_radius_after_relocalization
+                                        : config_.matching.local_search_radius;
+  const int matched_before = frame.matched_count();
+  const int added = local_map_.search(frame, radius, matcher_);
+  timings.local_map_search_ms = watch.elapsed_ms();
+  watch.reset();
+  estimator_.optimize(frame);
+  timings.local_map_pose_ms = watch.elapsed_ms();
+
+  int inliers = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const map::MapPointPtr& p = frame.map_point(i);
+    if (!p || frame.is_outlier(i)) continue;
+    p->increase_found();
+    if (p->num_observations() > 0) ++inliers;
+  }
+  local_map_inliers_ = inliers;
+  spdlog::debug(
+      "frame {}: {} matches before the local map ({} keyframes, {} points, {} in view), {} added, "
+      "{} inliers",
+      frame.id(), matched_before, local_map_.keyframes().size(), local_map_.points().size(),
+      local_map_.projected_count(), added, inliers);
+  const auto max_frames = static_cast<FrameId>(config_.keyframes.max_frames);
+  if (frame.id() < last_relocalization_frame_id_ + max_frames &&
+      inliers < config_.matching.local_map_min_inliers_after_relocalization) {
+    return false;
+  }
+  return inliers >= config_.matching.local_map_min_inliers;
+}
+
+bool Tracker::relocalize(Frame& frame) {
+  const RelocalizationResult r = relocalizer_.relocalize(frame, matcher_, estimator_);
+  if (!r.success) return false;
+  last_relocalization_frame_id_ = frame.id();
+  return true;
+}
+
+void Tracker::maybe_create_keyframe(Frame& frame, const MappingStatus& mapping,
+                                    TrackingResult& result) {
+  if (!reference_keyframe_) return;
+  KeyFrameContext context;
+  context.frame_id = frame.id();
+  context.last_keyframe_frame_id = last_keyframe_frame_id_;
+  context.last_relocalization_frame_id = last_relocalization_frame_id_;
+  context.keyframes_in_map = map_->keyframe_count();
+  context.reference_tracked_points =
+      reference_keyframe_->tracked_map_points(min_observations_for(context.keyframes_in_map));
+  context.inliers = local_map_inliers_;
+  context.close = count_close_points(frame);
+  context.mapping = mapping;
+  const bool insert = need_new_keyframe(config_.keyframes, context);
+  spdlog::debug(
+      "frame {}: keyframe {} (map {} keyframes, reference {} with {} points, {} inliers, close "
+      "tracked {} / untracked {}, mapping {})",
+      frame.id(), insert ? "inserted" : "not needed", context.keyframes_in_map,
+      reference_keyframe_->id(), context.reference_tracked_points, context.inliers,
+      context.close.tracked, context.close.non_tracked,
+      mapping.accepts_keyframes ? "idle" : "busy");
+  if (!insert) return;
+
+  map::KeyFramePtr keyframe =
+      create_keyframe(frame, *map_, config_.keyframes, *vocabulary_, config_.frame.bow_levels_up);
+  reference_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id();
+  result.new_keyframe = std::move(keyframe);
+}
+
+void Tracker::reset(TrackingResult& result) {
+  spdlog::warn("tracking lost with {} keyframe(s) in the map: resetting the map",
+               map_->keyframe_count());
+  map_->clear();
+  if (database_) database_->clear();
+  local_map_.clear();
+  motion_model_.reset();
+  reference_keyframe_.reset();
+  trajectory_.clear();
+  last_frame_tracked_ = false;
+  state_ = TrackingState::kNotInitialized;
+  result.map_reset = true;
+}
+
+io::Trajectory Tracker::camera_trajectory() const {
+  io::Trajectory trajectory;
+  map_->read_consistent([&] { trajectory = trajectory_.camera_trajectory(); });
+  return trajectory;
+}
+
+}  // namespace ddl::tracking

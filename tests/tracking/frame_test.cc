@@ -1,0 +1,115 @@
+#include "ddl/tracking/frame.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ddl/core/error.h"
+#include "tracking_test_support.h"
+
+namespace ddl::tracking {
+namespace {
+
+using testing::room_sequence;
+using testing::test_camera;
+
+TEST(FrameTest, ExtractsKeypointsWithExactDepthAndVirtualRight) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  const io::RgbdFrame& input = room_sequence().frames[0];
+  const Frame frame = builder.build(input, cv::Mat(), 0);
+
+  // The textured room fills the image, so the extractor reaches (nearly) its budget.
+  ASSERT_GT(frame.size(), 900u);
+  EXPECT_LE(frame.size(), 1000u + 8u);
+  const map::FrameFeatures& f = frame.features();
+  ASSERT_EQ(f.depth_m.size(), frame.size());
+  ASSERT_EQ(f.u_right.size(), frame.size());
+  EXPECT_EQ(f.grid.size(), frame.size());
+  const double bf = config.frame.bf;
+  int with_depth = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const cv::Point2f& pt = f.keypoints[i].pt;
+    const float truth = input.depth_m.at<float>(static_cast<int>(std::lround(pt.y)),
+                                                static_cast<int>(std::lround(pt.x)));
+    // Every pixel of the room has depth 0.3 .. 4.5 m (inside the valid range).
+    ASSERT_EQ(f.depth_m[i], truth) << "keypoint " << i;
+    ASSERT_FLOAT_EQ(f.u_right[i], pt.x - static_cast<float>(bf) / truth);
+    with_depth += frame.has_depth(i) ? 1 : 0;
+  }
+  EXPECT_EQ(with_depth, static_cast<int>(frame.size()));
+  EXPECT_NEAR(frame.geometry().close_depth_m, 40.0 * 40.0 / test_camera().fx, 1e-12);
+}
+
+TEST(FrameTest, InvalidDepthReadingsAreIgnored) {
+  const FrameGeometry g = FrameGeometry::from(test_camera(), FrameConfig{});
+  cv::Mat depth(4, 4, CV_32F, cv::Scalar(2.0f));
+  depth.at<float>(1, 1) = 0.0f;
+  depth.at<float>(1, 2) = 0.05f;  // below min_depth_m = 0.1
+  depth.at<float>(2, 1) = 12.0f;  // above max_depth_m = 10
+  depth.at<float>(2, 2) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(keypoint_depth(depth, 1.2f, 0.8f, g), 0.0f);  // rounds to (1, 1)
+  EXPECT_EQ(keypoint_depth(depth, 2.4f, 1.4f, g), 0.0f);
+  EXPECT_EQ(keypoint_depth(depth, 1.0f, 2.0f, g), 0.0f);
+  EXPECT_EQ(keypoint_depth(depth, 2.0f, 2.0f, g), 0.0f);
+  EXPECT_EQ(keypoint_depth(depth, 3.0f, 0.0f, g), 2.0f);
+  EXPECT_EQ(keypoint_depth(depth, 0.4f, 1.4f, g), 2.0f);   // rounds to x = 0, y = 1
+  EXPECT_EQ(keypoint_depth(depth, -0.6f, 0.0f, g), 0.0f);  // outside
+  EXPECT_EQ(keypoint_depth(depth, 3.4f, 3.4f, g), 2.0f);   // rounds to (3, 3)
+  EXPECT_EQ(keypoint_depth(depth, 3.6f, 3.0f, g), 0.0f);   // rounds to x = 4: outside
+}
+
+TEST(FrameTest, DynamicMaskExcludesFeatures) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  const io::RgbdFrame& input = room_sequence().frames[0];
+  cv::Mat mask(input.rgb.size(), CV_8U, cv::Scalar(0));
+  const cv::Rect masked(200, 100, 250, 250);
+  mask(masked).setTo(255);
+  const Frame frame = builder.build(input, mask, 0);
+  ASSERT_GT(frame.size(), 800u);  // the budget moves to the rest of the image
+  for (const cv::KeyPoint& kp : frame.features().keypoints) {
+    const cv::Point p(static_cast<int>(std::lround(kp.pt.x)),
+                      static_cast<int>(std::lround(kp.pt.y)));
+    EXPECT_EQ(mask.at<std::uint8_t>(p), 0) << "keypoint at " << kp.pt;
+  }
+}
+
+TEST(FrameTest, RejectsImagesOfTheWrongTypeOrSize) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  io::RgbdFrame input = room_sequence().frames[0];
+  input.depth_path = "depth/0001.png";
+  io::RgbdFrame bad_depth = input;
+  input.depth_m.convertTo(bad_depth.depth_m, CV_16U);
+  try {
+    builder.build(bad_depth, cv::Mat(), 0);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("depth/0001.png"), std::string::npos) << e.what();
+  }
+  io::RgbdFrame small = input;
+  small.rgb = input.rgb(cv::Rect(0, 0, 320, 240)).clone();
+  EXPECT_THROW(builder.build(small, cv::Mat(), 0), InputError);
+  EXPECT_THROW(builder.build(input, cv::Mat(10, 10, CV_8U), 0), InputError);
+}
+
+TEST(FrameTest, UnprojectsKeypointsIntoTheWorld) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  const auto& seq = room_sequence();
+  Frame frame = builder.build(seq.frames[5], cv::Mat(), 5);
+  frame.set_T_c_w(seq.T_w_c[5].inverse());
+  // A world point from the keypoint's depth projects back onto the keypoint.
+  for (std::size_t i = 0; i < frame.size(); i += 50) {
+    const Vec3d p_c = frame.T_c_w() * frame.unproject_w(i);
+    const Vec2d uv = frame.geometry().project(p_c);
+    EXPECT_NEAR(uv.x(), frame.features().keypoints[i].pt.x, 1e-4);
+    EXPECT_NEAR(uv.y(), frame.features().keypoints[i].pt.y, 1e-4);
+    EXPECT_NEAR(p_c.z(), frame.features().depth_m[i], 1e-5);
+  }
+  EXPECT_TRUE((frame.camera_center_w() - seq.T_w_c[5].translation()).norm() < 1e-12);
+}
+
+}  // namespace
+}  // namespace ddl::tracking

@@ -1,0 +1,99 @@
+#include "ddl/tracking/keyframe_decision.h"
+
+#include <gtest/gtest.h>
+
+#include "ddl/tracking/motion_model.h"
+
+namespace ddl::tracking {
+namespace {
+
+KeyFrameContext healthy_context() {
+  KeyFrameContext c;
+  c.frame_id = 100;
+  c.last_keyframe_frame_id = 95;
+  c.last_relocalization_frame_id = 0;
+  c.keyframes_in_map = 10;
+  c.reference_tracked_points = 400;
+  c.inliers = 380;  // 95% of the reference: tracking is strong
+  c.close = {300, 20};
+  return c;
+}
+
+TEST(KeyFrameDecisionTest, NoKeyframeWhileTrackingIsStrong) {
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, healthy_context()));
+}
+
+TEST(KeyFrameDecisionTest, InsertsWhenInliersDropBelowReferenceRatioAndMappingIdle) {
+  KeyFrameContext c = healthy_context();
+  c.inliers = 290;  // < 0.75 * 400
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.mapping.accepts_keyframes = false;  // busy mapper, not long enough since the last keyframe
+  c.mapping.queued_keyframes = 0;
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.frame_id = c.last_keyframe_frame_id + 30;  // max_frames passed: queue it
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.mapping.queued_keyframes = 3;  // queue full
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.mapping.queued_keyframes = 0;
+  c.mapping.stopped = true;
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+}
+
+TEST(KeyFrameDecisionTest, CloseDepthCriterion) {
+  KeyFrameContext c = healthy_context();
+  c.close = {99, 71};  // few tracked close points, many untracked ones
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.close = {100, 71};
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.close = {99, 70};
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+}
+
+TEST(KeyFrameDecisionTest, WeakTrackingQueuesEvenWhenBusy) {
+  KeyFrameContext c = healthy_context();
+  c.mapping.accepts_keyframes = false;
+  c.inliers = 90;  // < 0.25 * 400
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.inliers = 15;  // never with <= 15 inliers
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+}
+
+TEST(KeyFrameDecisionTest, SingleKeyframeMapUsesLowerRatioAndFewerObservations) {
+  KeyFrameContext c = healthy_context();
+  c.keyframes_in_map = 1;
+  c.inliers = 200;  // 50%: above the 40% threshold of a one-keyframe map
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.inliers = 150;
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  EXPECT_EQ(min_observations_for(1), 2);
+  EXPECT_EQ(min_observations_for(2), 2);
+  EXPECT_EQ(min_observations_for(3), 3);
+}
+
+TEST(KeyFrameDecisionTest, NoKeyframeRightAfterRelocalizationInABigMap) {
+  KeyFrameContext c = healthy_context();
+  c.inliers = 100;
+  c.keyframes_in_map = 40;
+  c.last_relocalization_frame_id = 90;
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.keyframes_in_map = 30;  // small map: allowed
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+}
+
+TEST(MotionModelTest, RepeatsTheLastRelativeMotion) {
+  const SE3 T0(so3_exp(Vec3d(0.01, -0.02, 0.03)), Vec3d(0.1, 0.2, 0.3));
+  const SE3 step(so3_exp(Vec3d(0.0, 0.02, 0.0)), Vec3d(0.01, 0.0, -0.02));
+  const SE3 T1 = step * T0;
+  MotionModel model;
+  EXPECT_FALSE(model.valid());
+  model.update(T1, T0);
+  ASSERT_TRUE(model.valid());
+  const SE3 predicted = model.predict(T1);
+  const SE3 expected = step * T1;
+  EXPECT_LT((predicted.matrix() - expected.matrix()).norm(), 1e-12);
+  model.reset();
+  EXPECT_FALSE(model.valid());
+}
+
+}  // namespace
+}  // namespace ddl::tracking

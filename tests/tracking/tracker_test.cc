@@ -1,0 +1,222 @@
+#include "ddl/tracking/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "tracking_test_support.h"
+
+namespace ddl::tracking {
+namespace {
+
+using testing::associate_keyframe;
+using testing::pose_error;
+using testing::room_sequence;
+
+struct SequenceRun {
+  std::vector<TrackingResult> results;
+  io::Trajectory trajectory;
+  std::shared_ptr<map::Map> map;
+  std::size_t keyframes_created = 0;
+};
+
+/// Tracks frames [0, count) of the room sequence. With `associate`, each new keyframe goes
+/// through the minimal local-mapping stand-in (observations, covisibility, BoW database).
+SequenceRun track_sequence(std::size_t count, bool associate, const TrackerConfig& config) {
+  SequenceRun run;
+  run.map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  Tracker tracker(config, testing::test_camera(), run.map, testing::room_vocabulary(), database);
+  const MappingStatus idle;
+  for (std::size_t k = 0; k < count; ++k) {
+    TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
+    if (r.new_keyframe) {
+      ++run.keyframes_created;
+      if (associate) associate_keyframe(r.new_keyframe, *database);
+    }
+    run.results.push_back(std::move(r));
+  }
+  run.trajectory = tracker.camera_trajectory();
+  return run;
+}
+
+/// Ground truth of frame k expressed in the first camera's frame (the map's world frame).
+SE3 truth_in_map(std::size_t k) {
+  const auto& seq = room_sequence();
+  return seq.T_w_c[0].inverse() * seq.T_w_c[k];
+}
+
+void expect_accurate(const SequenceRun& run, std::size_t count) {
+  ASSERT_EQ(run.results.size(), count);
+  EXPECT_EQ(run.results[0].method, TrackingMethod::kInitialization);
+  ASSERT_EQ(run.trajectory.size(), count);
+  double worst_t = 0.0;
+  double worst_r = 0.0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const TrackingResult& r = run.results[k];
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
+    ASSERT_TRUE(r.T_w_c.has_value());
+    EXPECT_GE(r.num_inliers, 100) << "frame " << k;
+    const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
+    const testing::PoseError e_traj = pose_error(run.trajectory[k].T_w_c(), truth_in_map(k));
+    worst_t = std::max({worst_t, e.translation_m, e_traj.translation_m});
+    worst_r = std::max({worst_r, e.rotation_deg, e_traj.rotation_deg});
+    EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
+    EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+    EXPECT_LT(e_traj.translation_m, 0.01) << "frame " << k;
+    EXPECT_LT(e_traj.rotation_deg, 0.5) << "frame " << k;
+  }
+  std::printf("worst error over %zu frames: %.2f mm, %.3f deg\n", count, worst_t * 1000.0, worst_r);
+}
+
+TEST(TrackerTest, TracksSyntheticSequenceWithMapFromTrackerOnly) {
+  const SequenceRun run = track_sequence(30, /*associate=*/false, testing::test_tracker_config());
+  expect_accurate(run, 30);
+  // Frames after the second use the constant-velocity model.
+  int motion_model = 0;
+  for (const auto& r : run.results) motion_model += r.method == TrackingMethod::kMotionModel;
+  EXPECT_GE(motion_model, 20);
+  EXPECT_GE(run.keyframes_created, 2u);
+  EXPECT_EQ(run.map->keyframe_count(), run.keyframes_created);
+}
+
+TEST(TrackerTest, TracksSyntheticSequenceWithKeyframeAssociation) {
+  const SequenceRun run = track_sequence(40, /*associate=*/true, testing::test_tracker_config());
+  expect_accurate(run, 40);
+  EXPECT_GE(run.keyframes_created, 3u);
+  // Keyframes are linked in the covisibility graph and the spanning tree.
+  for (const map::KeyFramePtr& kf : run.map->keyframes()) {
+    if (kf->id() == 0) continue;
+    EXPECT_TRUE(kf->parent()) << "keyframe " << kf->id();
+    EXPECT_FALSE(kf->covisibles().empty()) << "keyframe " << kf->id();
+  }
+}
+
+TEST(TrackerTest, SameInputGivesIdenticalTrajectory) {
+  const SequenceRun a = track_sequence(20, true, testing::test_tracker_config());
+  const SequenceRun b = track_sequence(20, true, testing::test_tracker_config());
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (std::size_t k = 0; k < a.trajectory.size(); ++k) {
+    EXPECT_EQ(a.trajectory[k].timestamp_s, b.trajectory[k].timestamp_s);
+    EXPECT_EQ(a.trajectory[k].t_w_c, b.trajectory[k].t_w_c) << "frame " << k;
+    EXPECT_EQ(a.trajectory[k].q_xyzw, b.trajectory[k].q_xyzw) << "frame " << k;
+    EXPECT_EQ(a.results[k].num_inliers, b.results[k].num_inliers) << "frame " << k;
+  }
+  EXPECT_EQ(a.map->map_point_count(), b.map->map_point_count());
+  EXPECT_EQ(a.keyframes_created, b.keyframes_created);
+}
+
+io::RgbdFrame blank_frame(std::size_t index, double stamp) {
+  io::RgbdFrame f;
+  f.index = index;
+  f.timestamp_s = stamp;
+  f.rgb = cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+  f.depth_m = cv::Mat(480, 640, CV_32F, cv::Scalar(0.0f));
+  return f;
+}
+
+TEST(TrackerTest, RelocalizesAfterBlankFrames) {
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  TrackerConfig config = testing::test_tracker_config();
+  // The short sequence makes only a few keyframes; ORB-SLAM2 would reset such a map when lost.
+  config.reset_when_lost_max_keyframes = -1;
+  Tracker tracker(config, testing::test_camera(), map, testing::room_vocabulary(), database);
+  const MappingStatus idle;
+  const auto& seq = room_sequence();
+  const std::size_t tracked = 30;
+  for (std::size_t k = 0; k < tracked; ++k) {
+    const TrackingResult r = tracker.track(seq.frames[k], cv::Mat(), idle);
+    ASSERT_TRUE(r.tracked()) << "frame " << k;
+    if (r.new_keyframe) associate_keyframe(r.new_keyframe, *database);
+  }
+  ASSERT_GE(map->keyframe_count(), 2u);
+
+  double stamp = seq.frames[tracked - 1].timestamp_s;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const TrackingResult r =
+        tracker.track(blank_frame(tracked + k, stamp += 1.0 / 30), cv::Mat(), idle);
+    EXPECT_EQ(r.state, TrackingState::kLost);
+    EXPECT_FALSE(r.T_w_c.has_value());
+    EXPECT_FALSE(r.map_reset);
+  }
+  // Back at a place seen before (near frame 12), but from a slightly different pose.
+  const SE3 T_w_c = seq.T_w_c[12] * SE3(so3_exp(Vec3d(0.0, 0.01, 0.0)), Vec3d(0.02, 0.0, 0.0));
+  const io::RgbdFrame revisit =
+      testing::room().render(testing::test_camera(), T_w_c, tracked + 3, stamp + 1.0 / 30, 1.0);
+  const TrackingResult r = tracker.track(revisit, cv::Mat(), idle);
+  ASSERT_EQ(r.state, TrackingState::kRelocalized);
+  EXPECT_EQ(r.method, TrackingMethod::kRelocalization);
+  ASSERT_TRUE(r.T_w_c.has_value());
+  const testing::PoseError e = pose_error(*r.T_w_c, seq.T_w_c[0].inverse() * T_w_c);
+  EXPECT_LT(e.translation_m, 0.01);
+  EXPECT_LT(e.rotation_deg, 0.5);
+  EXPECT_GE(r.num_inliers, 50);
+
+  // Tracking goes on normally from there.
+  const SE3 T_w_c_next = T_w_c * SE3(so3_exp(Vec3d(0.0, 0.005, 0.0)), Vec3d(0.01, 0.0, 0.0));
+  const TrackingResult next =
+      tracker.track(testing::room().render(testing::test_camera(), T_w_c_next, tracked + 4,
+                                           stamp + 2.0 / 30, 1.0),
+                    cv::Mat(), idle);
+  ASSERT_EQ(next.state, TrackingState::kOk);
+  EXPECT_LT(pose_error(*next.T_w_c, seq.T_w_c[0].inverse() * T_w_c_next).translation_m, 0.01);
+  // Lost frames are left out of the trajectory.
+  EXPECT_EQ(tracker.camera_trajectory().size(), tracked + 2);
+}
+
+TEST(TrackerTest, ResetsWhenLostWithATinyMap) {
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), database);
+  const MappingStatus idle;
+  const auto& seq = room_sequence();
+  TrackingResult r = tracker.track(blank_frame(0, 1.0), cv::Mat(), idle);
+  EXPECT_EQ(r.state, TrackingState::kNotInitialized);  // no features: no map
+  r = tracker.track(seq.frames[0], cv::Mat(), idle);
+  ASSERT_EQ(r.state, TrackingState::kOk);
+  ASSERT_TRUE(r.new_keyframe);
+  associate_keyframe(r.new_keyframe, *database);
+  EXPECT_EQ(map->keyframe_count(), 1u);
+  EXPECT_GT(map->map_point_count(), 500u);
+
+  r = tracker.track(blank_frame(2, 2.0), cv::Mat(), idle);
+  EXPECT_EQ(r.state, TrackingState::kLost);
+  EXPECT_TRUE(r.map_reset);
+  EXPECT_EQ(map->keyframe_count(), 0u);
+  EXPECT_EQ(map->map_point_count(), 0u);
+  EXPECT_EQ(database->size(), 0u);
+  EXPECT_EQ(tracker.state(), TrackingState::kNotInitialized);
+
+  r = tracker.track(seq.frames[1], cv::Mat(), idle);
+  EXPECT_EQ(r.state, TrackingState::kOk);
+  EXPECT_EQ(r.method, TrackingMethod::kInitialization);
+  EXPECT_EQ(tracker.camera_trajectory().size(), 1u);
+}
+
+TEST(TrackerTest, DynamicMaskKeepsTrackingOnTheRest) {
+  // A static "object" masked out in every frame: tracking uses the rest of the image.
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), database);
+  cv::Mat mask(480, 640, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(240, 120, 200, 260)).setTo(255);
+  const MappingStatus idle;
+  for (std::size_t k = 0; k < 10; ++k) {
+    const TrackingResult r = tracker.track(room_sequence().frames[k], mask, idle);
+    ASSERT_TRUE(r.tracked()) << "frame " << k;
+    if (r.new_keyframe) associate_keyframe(r.new_keyframe, *database);
+    EXPECT_LT(pose_error(*r.T_w_c, truth_in_map(k)).translation_m, 0.01);
+  }
+  for (const cv::KeyPoint& kp : tracker.last_frame().features().keypoints) {
+    EXPECT_EQ(mask.at<std::uint8_t>(cv::Point(static_cast<int>(std::lround(kp.pt.x)),
+                                              static_cast<int>(std::lround(kp.pt.y)))),
+              0);
+  }
+}
+
+}  // namespace
+}  // namespace ddl::tracking
