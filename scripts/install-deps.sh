@@ -8,7 +8,7 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev liboctomap-dev octomap-tools libtbb-dev
   libyaml-cpp-dev libspdlog-dev libfmt-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  opencv-doc clang-format
+  opencv-doc clang-format zlib1g-dev
 )
 
 missing=()

@@ -1,0 +1,236 @@
+// The composite source: real TUM frames with real people rendered into them (docs/synthetic.md).
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "ddl/core/error.h"
+#include "ddl/io/trajectory_io.h"
+#include "ddl/io/tum_dataset.h"
+#include "ddl/synthetic/people.h"
+#include "ddl/synthetic/renderer.h"
+#include "ddl/synthetic/sequence_internal.h"
+
+namespace ddl::synthetic {
+namespace {
+
+/// Ground-truth pose at `stamp` by linear/slerp interpolation; false outside the trajectory.
+bool interpolate_pose(const io::Trajectory& gt, double stamp, SE3& out) {
+  if (gt.empty() || stamp < gt.front().timestamp_s || stamp > gt.back().timestamp_s) return false;
+  const auto it =
+      std::lower_bound(gt.begin(), gt.end(), stamp,
+                       [](const io::StampedPose& p, double s) { return p.timestamp_s < s; });
+  if (it == gt.begin()) {
+    out = it->T_w_c();
+    return true;
+  }
+  const auto prev = it - 1;
+  const double span = it->timestamp_s - prev->timestamp_s;
+  const double s = span > 0 ? (stamp - prev->timestamp_s) / span : 0.0;
+  out = interpolate(prev->T_w_c(), it->T_w_c(), s);
+  return true;
+}
+
+class CompositeSequence final : public SequenceSource {
+ public:
+  explicit CompositeSequence(const SequenceConfig& config)
+      : config_(config),
+        dataset_(config.background_dir, config.background_camera),
+        renderer_(config.background_camera) {
+    const auto gt_path = dataset_.groundtruth_path();
+    if (!gt_path) {
+      throw InputError::at(config.background_dir,
+                           "a composite needs the sequence's groundtruth.txt (camera poses)");
+    }
+    groundtruth_ = io::read_tum_trajectory(*gt_path);
+    for (std::size_t i = 0; i < dataset_.pairs().size(); ++i) {
+      SE3 pose;
+      if (!interpolate_pose(groundtruth_, dataset_.pairs()[i].rgb_timestamp_s, pose)) continue;
+      frames_.push_back(i);
+      poses_.push_back(pose);
+      if (config.frames > 0 && static_cast<int>(frames_.size()) >= config.frames) break;
+    }
+    if (frames_.empty()) {
+      throw InputError::at(*gt_path, "no RGB-D pair lies inside the ground-truth time range");
+    }
+    // Where the camera looks on average: the walkers move sideways across that direction.
+    Vec3d mean_position = Vec3d::Zero();
+    Vec3d mean_forward = Vec3d::Zero();
+    for (const auto& p : poses_) {
+      mean_position += p.translation();
+      mean_forward += p.rotation().col(2);
+    }
+    mean_position /= static_cast<double>(poses_.size());
+    Vec3d forward(mean_forward.x(), mean_forward.y(), 0.0);
+    if (forward.norm() < 1e-6) forward = Vec3d::UnitX();
+    forward.normalize();
+    const Vec3d side(-forward.y(), forward.x(), 0.0);
+    const Vec3d foot(mean_position.x(), mean_position.y(), 0.0);  // TUM mocap floor: z = 0
+    t0_ = dataset_.pairs()[frames_.front()].rgb_timestamp_s;
+
+    Rng rng(config.seed);
+    Rng people_rng = rng.fork(2);
+    appearances_ = load_people(scene_, config.people_dir, 2, people_rng);
+    const double distances[2] = {config.walker_distance_near_m, config.walker_distance_far_m};
+    const double half_widths[2] = {0.9, 1.2};
+    for (int k = 0; k < 2; ++k) {
+      PersonTrack track;
+      track.type = PersonTrackType::kWalking;
+      track.appearance = k;
+      track.height_m = people_rng.uniform(1.6, 1.9);
+      track.seed = people_rng.next();
+      const Vec3d centre = foot + distances[k] * forward;
+      const double sign = k == 0 ? 1.0 : -1.0;
+      track.a_w = centre - sign * half_widths[k] * side;
+      track.b_w = centre + sign * half_widths[k] * side;
+      track.period_s = people_rng.uniform(6.0, 8.0);
+      track.phase = people_rng.uniform(0, 2 * M_PI);
+      tracks_.push_back(track);
+    }
+  }
+
+  const SequenceConfig& config() const override { return config_; }
+  const camera::PinholeCamera& camera() const override { return config_.background_camera; }
+  std::size_t frame_count() const override { return frames_.size(); }
+
+  FrameData render_frame(std::size_t index) const override {
+    const io::FramePair& pair = dataset_.pairs().at(frames_.at(index));
+    FrameData f;
+    f.index = index;
+    f.rgb_stamp_s = pair.rgb_timestamp_s;
+    f.depth_stamp_s = pair.depth_timestamp_s;
+    f.T_w_c = poses_[index];
+    f.background_rgb = cv::imread(pair.rgb_path, cv::IMREAD_COLOR);
+    if (f.background_rgb.empty()) throw InputError::at(pair.rgb_path, "cannot decode the image");
+    f.background_depth_raw = cv::imread(pair.depth_path, cv::IMREAD_UNCHANGED);
+    if (f.background_depth_raw.type() != CV_16UC1) {
+      throw InputError::at(pair.depth_path, "expected a 16-bit single-channel depth PNG");
+    }
+    const camera::PinholeCamera& cam = config_.background_camera;
+    if (f.background_rgb.cols != cam.width || f.background_rgb.rows != cam.height ||
+        f.background_depth_raw.size() != f.background_rgb.size()) {
+      throw InputError::at(pair.rgb_path, fmt::format("frame size differs from the camera's {}x{}",
+                                                      cam.width, cam.height));
+    }
+    const double t = pair.rgb_timestamp_s - t0_;
+    const Vec3d camera_w = f.T_w_c.translation();
+    std::vector<Surface> surfaces;
+    for (std::size_t k = 0; k < tracks_.size(); ++k) {
+      const PersonState state = person_state(tracks_[k], t);
+      f.entities.push_back({static_cast<int>(k) + 1, "person", true, true, state.foot_w});
+      surfaces.push_back(
+          person_billboard(tracks_[k], appearances_[k], state, camera_w, static_cast<int>(k) + 1));
+    }
+    const PreparedSurfaces prepared(surfaces, scene_.textures, f.T_w_c.inverse());
+    RenderBuffers people = renderer_.make_buffers();
+    renderer_.rasterize(prepared, 0, surfaces.size(), people);
+
+    // Depth test against the real depth: a person pixel exists where it is nearer than the real
+    // surface, or where the sensor measured nothing.
+    f.background_depth_raw.convertTo(f.background_depth_exact_m, CV_32FC1, 1.0 / cam.depth_factor);
+    f.dynamic_mask = cv::Mat(people.id.size(), CV_8UC1, cv::Scalar(0));
+    f.entity = cv::Mat(people.id.size(), CV_32SC1, cv::Scalar(0));
+    f.depth_exact_m = f.background_depth_exact_m.clone();
+    std::size_t dynamic_pixels = 0;
+    for (int v = 0; v < people.id.rows; ++v) {
+      int* id = people.id.ptr<int>(v);
+      const float* z = people.depth_m.ptr<float>(v);
+      const float* real = f.background_depth_exact_m.ptr<float>(v);
+      float* exact = f.depth_exact_m.ptr<float>(v);
+      auto* mask = f.dynamic_mask.ptr<unsigned char>(v);
+      int* ent = f.entity.ptr<int>(v);
+      for (int u = 0; u < people.id.cols; ++u) {
+        if (id[u] < 0) continue;
+        if (real[u] > 0.0f && z[u] >= real[u]) {
+          id[u] = -1;  // hidden behind the real scene
+          continue;
+        }
+        mask[u] = 255;
+        ent[u] = surfaces[static_cast<std::size_t>(id[u])].entity;
+        exact[u] = z[u];
+        ++dynamic_pixels;
+      }
+    }
+    f.rgb = f.background_rgb.clone();
+    cv::Mat cos_incidence;
+    renderer_.shade(prepared, people, 0, f.rgb, cos_incidence);
+    // Sensor model on the combined depth; only person pixels take the modelled value, the real
+    // measurements stay, except where they become the far side of a person's edge (shadow).
+    cv::Mat combined_cos(people.id.size(), CV_32FC1, cv::Scalar(1.0f));
+    cos_incidence.copyTo(combined_cos, f.dynamic_mask);
+    const cv::Mat modelled = apply_depth_model(f.depth_exact_m, combined_cos, config_.depth,
+                                               cam.depth_factor, config_.seed, index);
+    f.depth_raw = f.background_depth_raw.clone();
+    modelled.copyTo(f.depth_raw, f.dynamic_mask);
+    const float jump = static_cast<float>(config_.depth.edge_jump_m);
+    for (int v = 0; v < people.id.rows; ++v) {
+      auto* out = f.depth_raw.ptr<std::uint16_t>(v);
+      const auto* mask = f.dynamic_mask.ptr<unsigned char>(v);
+      const float* real = f.depth_exact_m.ptr<float>(v);
+      for (int u = 0; u < people.id.cols; ++u) {
+        if (mask[u] || out[u] == 0) continue;
+        for (int dv = -1; dv <= 1; ++dv) {
+          for (int du = -1; du <= 1; ++du) {
+            const int vv = v + dv;
+            const int uu = u + du;
+            if (vv < 0 || uu < 0 || vv >= people.id.rows || uu >= people.id.cols) continue;
+            if (f.dynamic_mask.at<unsigned char>(vv, uu) &&
+                real[u] - f.depth_exact_m.at<float>(vv, uu) > jump) {
+              out[u] = 0;
+            }
+          }
+        }
+      }
+    }
+    f.dynamic_fraction = static_cast<double>(dynamic_pixels) / static_cast<double>(f.rgb.total());
+    return f;
+  }
+
+  io::Trajectory groundtruth() const override { return groundtruth_; }
+
+  nlohmann::json description() const override {
+    nlohmann::json people = nlohmann::json::array();
+    for (std::size_t k = 0; k < tracks_.size(); ++k) {
+      const auto& tr = tracks_[k];
+      people.push_back({{"entity", static_cast<int>(k) + 1},
+                        {"photo", appearances_[k].source},
+                        {"track", "walking"},
+                        {"height_m", tr.height_m},
+                        {"a_w", {tr.a_w.x(), tr.a_w.y(), tr.a_w.z()}},
+                        {"b_w", {tr.b_w.x(), tr.b_w.y(), tr.b_w.z()}},
+                        {"period_s", tr.period_s}});
+    }
+    return {{"kind", "composite"},
+            {"background_sequence", config_.background_dir},
+            {"associations", dataset_.association_description()},
+            {"world_frame", "the sequence's ground-truth (motion capture) frame; floor z = 0"},
+            {"people", people},
+            {"distortion",
+             "people are rendered into the distorted images: every pixel's ray is the inverse of "
+             "the camera's Brown-Conrady model, so undistorting the frame gives a correct "
+             "pinhole image of the person"}};
+  }
+
+ private:
+  SequenceConfig config_;
+  io::TumDataset dataset_;
+  Renderer renderer_;
+  Scene scene_;  // textures of the people only
+  io::Trajectory groundtruth_;
+  std::vector<std::size_t> frames_;  // indices into dataset_.pairs() with a ground-truth pose
+  AlignedVector<SE3> poses_;
+  double t0_ = 0.0;
+  std::vector<PersonAppearance> appearances_;
+  std::vector<PersonTrack> tracks_;
+};
+
+}  // namespace
+
+std::unique_ptr<SequenceSource> make_composite_sequence(const SequenceConfig& config) {
+  return std::make_unique<CompositeSequence>(config);
+}
+
+}  // namespace ddl::synthetic

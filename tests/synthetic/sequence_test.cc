@@ -1,0 +1,301 @@
+// Generated sequences: ground-truth conventions, determinism, TUM layout.
+
+#include "ddl/synthetic/sequence.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "ddl/core/error.h"
+#include "ddl/io/text_table.h"
+#include "ddl/io/trajectory_io.h"
+#include "ddl/io/tum_dataset.h"
+#include "test_support.h"
+
+namespace ddl::synthetic {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::small_config;
+using testing::TempDir;
+
+/// Pixels where two images differ (any channel), CV_8UC1 255.
+cv::Mat differs(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  if (diff.channels() > 1) {
+    cv::Mat gray;
+    cv::transform(diff, gray, cv::Matx13f(1, 1, 1));
+    diff = gray;
+  }
+  return diff > 0;
+}
+
+int count_outside(const cv::Mat& pixels, const cv::Mat& allowed) {
+  cv::Mat outside;
+  cv::bitwise_and(pixels, ~allowed, outside);
+  return cv::countNonZero(outside);
+}
+
+TEST(Sequence, DynamicMaskIsExactlyTheRenderedPeople) {
+  const auto source = make_sequence_source(small_config("syn_walking_xyz", 300));
+  double max_fraction = 0.0;
+  int frames_with_people = 0;
+  for (std::size_t i = 0; i < 300; i += 20) {
+    const FrameData f = source->render_frame(i);
+    max_fraction = std::max(max_fraction, f.dynamic_fraction);
+    // The frame and its background differ only inside the mask (same noise elsewhere).
+    EXPECT_EQ(count_outside(differs(f.rgb, f.background_rgb), f.dynamic_mask), 0) << i;
+    // Depth differs at most in the mask grown by the 2 px edge dropouts.
+    cv::Mat grown;
+    cv::dilate(f.dynamic_mask, grown, cv::Mat::ones(5, 5, CV_8U));
+    EXPECT_EQ(count_outside(differs(f.depth_raw, f.background_depth_raw), grown), 0) << i;
+    // Mask pixels are exactly the pixels whose visible entity is a person.
+    const cv::Mat people = f.entity >= 1;
+    EXPECT_EQ(cv::norm(people, f.dynamic_mask, cv::NORM_INF), 0.0) << i;
+    // And a person is in front of what the background shows there.
+    for (int v = 0; v < f.entity.rows; ++v) {
+      for (int u = 0; u < f.entity.cols; ++u) {
+        if (f.dynamic_mask.at<unsigned char>(v, u) == 0) continue;
+        ASSERT_LT(f.depth_exact_m.at<float>(v, u), f.background_depth_exact_m.at<float>(v, u));
+      }
+    }
+    if (f.dynamic_fraction > 0.01) ++frames_with_people;
+  }
+  EXPECT_GT(max_fraction, 0.15) << "people should at times cover a large part of the image";
+  EXPECT_LT(max_fraction, 0.75);
+  EXPECT_GE(frames_with_people, 10) << "two walkers are in view most of the time";
+}
+
+TEST(Sequence, MovedObjectBecomesDynamicWhenItMoves) {
+  // syn_sitting_static: two seated people (entities 1, 2) and a box (entity 3) moved at 12 s.
+  const auto source = make_sequence_source(small_config("syn_sitting_static", 707));
+  const FrameData before = source->render_frame(300);  // 10 s
+  const FrameData during = source->render_frame(375);  // 12.5 s
+  const FrameData after = source->render_frame(450);   // 15 s
+  const cv::Mat box_before = before.entity == 3;
+  ASSERT_GT(cv::countNonZero(box_before), 50) << "the box should be in view";
+  EXPECT_EQ(cv::countNonZero(box_before & before.dynamic_mask), 0);
+  EXPECT_FALSE(before.entities[2].dynamic);
+  for (const FrameData* f : {&during, &after}) {
+    const cv::Mat box = f->entity == 3;
+    ASSERT_GT(cv::countNonZero(box), 50);
+    EXPECT_EQ(count_outside(box, f->dynamic_mask), 0);
+    EXPECT_TRUE(f->entities[2].dynamic);
+    EXPECT_EQ(count_outside(differs(f->rgb, f->background_rgb), f->dynamic_mask), 0);
+  }
+  // The box ends elsewhere: its pixels after the move are not where they were before.
+  const cv::Mat box_after = after.entity == 3;
+  EXPECT_LT(cv::countNonZero(box_after & box_before), cv::countNonZero(box_before) / 2);
+  // Seated people are dynamic and in the mask in every frame.
+  EXPECT_GT(cv::countNonZero(before.dynamic_mask & (before.entity == 1)), 100);
+}
+
+std::vector<std::string> list_files(const fs::path& root) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (e.is_regular_file()) out.push_back(fs::relative(e.path(), root).string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+class WrittenSequence : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_a_ = new TempDir("ddl_synth_a");
+    dir_b_ = new TempDir("ddl_synth_b");
+    const SequenceConfig config = small_config("syn_walking_xyz", 4);
+    write_sequence(*make_sequence_source(config), dir_a_->str());
+    write_sequence(*make_sequence_source(config), dir_b_->str());
+  }
+  static void TearDownTestSuite() {
+    delete dir_a_;
+    delete dir_b_;
+  }
+  static TempDir* dir_a_;
+  static TempDir* dir_b_;
+};
+TempDir* WrittenSequence::dir_a_ = nullptr;
+TempDir* WrittenSequence::dir_b_ = nullptr;
+
+TEST_F(WrittenSequence, SameSeedGivesTheSameBytes) {
+  const auto files = list_files(dir_a_->path());
+  ASSERT_EQ(files, list_files(dir_b_->path()));
+  // 5 image folders x 4 frames + 10 index/meta files.
+  EXPECT_EQ(files.size(), 5u * 4u + 10u);
+  for (const auto& f : files) {
+    EXPECT_EQ(read_bytes(dir_a_->path() / f), read_bytes(dir_b_->path() / f)) << f;
+  }
+  // Another seed gives other images.
+  SequenceConfig other = small_config("syn_walking_xyz", 1);
+  other.seed += 1;
+  const FrameData f = make_sequence_source(other)->render_frame(0);
+  const cv::Mat first = cv::imread((dir_a_->path() / "rgb/1341840000.000000.png").string());
+  EXPECT_GT(cv::norm(first, f.rgb, cv::NORM_L1), 0.0);
+}
+
+TEST_F(WrittenSequence, TumReaderReadsIt) {
+  const camera::PinholeCamera cam = small_config("syn_walking_xyz", 4).camera;
+  const io::TumDataset dataset(dir_a_->str(), cam);
+  ASSERT_EQ(dataset.size(), 4u);
+  EXPECT_EQ(dataset.association_description(), "associations.txt");
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    const auto frame = dataset.frame(i);
+    EXPECT_EQ(frame.rgb.type(), CV_8UC3);
+    EXPECT_EQ(frame.depth_m.type(), CV_32FC1);
+    EXPECT_EQ(frame.rgb.size(), cv::Size(320, 240));
+    EXPECT_GT(cv::countNonZero(frame.depth_m), 320 * 240 / 2);
+    EXPECT_NEAR(frame.timestamp_s, 1341840000.0 + static_cast<double>(i) / 30.0, 1e-6);
+    // Depth stamps differ from RGB stamps by a few ms, like a Kinect's.
+    const auto& pair = dataset.pairs()[i];
+    EXPECT_LE(std::abs(pair.depth_timestamp_s - pair.rgb_timestamp_s), 0.0061);
+  }
+  ASSERT_TRUE(dataset.groundtruth_path().has_value());
+  const auto gt = io::read_tum_trajectory(*dataset.groundtruth_path());
+  ASSERT_EQ(gt.size(), 4u);
+  EXPECT_DOUBLE_EQ(gt[1].timestamp_s, dataset.timestamp(1));
+  // The three-line TUM headers and the extra lists.
+  const std::string rgb_txt = read_bytes(dir_a_->path() / "rgb.txt");
+  EXPECT_EQ(rgb_txt.rfind("# color images\n# file: '", 0), 0u);
+  EXPECT_EQ(io::read_text_table((dir_a_->path() / "dynamic_mask.txt").string()).size(), 4u);
+  const io::TumDataset background((dir_a_->path() / "background").string(), cam);
+  EXPECT_EQ(background.size(), 4u);
+  const std::string yaml = read_bytes(dir_a_->path() / "camera.yaml");
+  for (const char* key : {"camera:\n", "  name: ", "  fx: 267.7\n", "  distortion: [0, 0, 0, 0, 0]",
+                          "  depth_factor: 5000\n", "  fps: 30\n"}) {
+    EXPECT_NE(yaml.find(key), std::string::npos) << key;
+  }
+  const std::string meta = read_bytes(dir_a_->path() / "meta.json");
+  EXPECT_NE(meta.find("\"dynamic_fraction\""), std::string::npos);
+}
+
+TEST(Sequence, GroundTruthPosesAndDepthAgreeAcrossFrames) {
+  // Through the written files only: a point unprojected from frame 0's depth with frame 0's
+  // ground-truth pose, projected into frame 24 with its pose, lands where frame 24 sees the
+  // same depth.
+  TempDir dir("ddl_synth_gt");
+  SequenceConfig config = small_config("syn_static_xyz", 25);
+  config.depth.enabled = false;
+  config.rgb_noise_sigma = 0;
+  write_sequence(*make_sequence_source(config), dir.str());
+  const io::TumDataset dataset(dir.str(), config.camera);
+  const auto gt = io::read_tum_trajectory(*dataset.groundtruth_path());
+  ASSERT_EQ(gt.size(), 25u);
+  const auto f0 = dataset.frame(0);
+  const auto f1 = dataset.frame(24);
+  const SE3 T_w_0 = gt[0].T_w_c();
+  const SE3 T_1_w = gt[24].T_w_c().inverse();
+  ASSERT_GT((gt[24].t_w_c - gt[0].t_w_c).norm(), 0.05) << "needs a baseline";
+  std::vector<double> errors;
+  const auto& cam = config.camera;
+  for (int v = 2; v < cam.height - 2; v += 4) {
+    for (int u = 2; u < cam.width - 2; u += 4) {
+      const float d = f0.depth_m.at<float>(v, u);
+      if (d <= 0) continue;
+      const Vec3d p1 = T_1_w * (T_w_0 * cam.unproject(u, v, d));
+      const Vec2d uv = cam.project(p1);
+      if (!cam.in_image(uv, 2)) continue;
+      const int u0 = static_cast<int>(uv.x());
+      const int v0 = static_cast<int>(uv.y());
+      const float a = f1.depth_m.at<float>(v0, u0), b = f1.depth_m.at<float>(v0, u0 + 1);
+      const float c = f1.depth_m.at<float>(v0 + 1, u0), e = f1.depth_m.at<float>(v0 + 1, u0 + 1);
+      if (std::max({a, b, c, e}) - std::min({a, b, c, e}) > 0.02 || std::min({a, b, c, e}) <= 0) {
+        continue;  // a depth edge: occlusion or silhouette
+      }
+      const double wx = uv.x() - u0, wy = uv.y() - v0;
+      const double z = (1 - wy) * ((1 - wx) * a + wx * b) + wy * ((1 - wx) * c + wx * e);
+      errors.push_back(std::abs(z - p1.z()));
+    }
+  }
+  ASSERT_GT(errors.size(), 2000u);
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.001);
+  EXPECT_LT(errors[errors.size() * 95 / 100], 0.005);
+}
+
+TEST(Sequence, CompositeDrawsPeopleOnlyInFrontOfTheRealScene) {
+  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
+  if (!fs::exists(background + "/groundtruth.txt")) {
+    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
+  }
+  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
+  config.background_dir = background;
+  config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  const auto source = make_sequence_source(config);
+  EXPECT_GT(source->frame_count(), 600u);
+  int frames_with_people = 0;
+  int frames_checked = 0;
+  for (std::size_t i = 0; i < source->frame_count(); i += 50, ++frames_checked) {
+    const FrameData f = source->render_frame(i);
+    EXPECT_EQ(count_outside(differs(f.rgb, f.background_rgb), f.dynamic_mask), 0);
+    cv::Mat grown;
+    cv::dilate(f.dynamic_mask, grown, cv::Mat::ones(3, 3, CV_8U));
+    EXPECT_EQ(count_outside(differs(f.depth_raw, f.background_depth_raw), grown), 0);
+    for (int v = 0; v < f.rgb.rows; ++v) {
+      for (int u = 0; u < f.rgb.cols; ++u) {
+        if (f.dynamic_mask.at<unsigned char>(v, u) == 0) continue;
+        const float real = f.background_depth_exact_m.at<float>(v, u);
+        ASSERT_TRUE(real == 0.0f || f.depth_exact_m.at<float>(v, u) < real);
+      }
+    }
+    if (f.dynamic_fraction > 0.02) ++frames_with_people;
+  }
+  // Over the whole sequence people cover > 2% of the image in about 80% of the frames (the
+  // camera rotates away from them at times).
+  EXPECT_GE(frames_with_people, frames_checked / 2);
+}
+
+TEST(Sequence, PresetsMirrorTheBenchmarkRows) {
+  std::set<std::string> names;
+  for (const auto& p : presets()) {
+    EXPECT_TRUE(names.insert(p.name).second) << p.name;
+    if (p.background_in_shared.empty()) {
+      EXPECT_GE(p.config.frames, 600) << p.name;
+      EXPECT_LE(p.config.frames, 900) << p.name;
+      EXPECT_NO_THROW(p.config.validate()) << p.name;
+    }
+  }
+  for (const char* name :
+       {"syn_walking_xyz", "syn_walking_static", "syn_walking_rpy", "syn_walking_halfsphere",
+        "syn_sitting_static", "syn_sitting_halfsphere", "syn_desk_person", "syn_static_xyz",
+        "syn_static_static", "syn_static_rpy", "syn_static_halfsphere", "syn_static_loop",
+        "composite_fr1_rpy_walking"}) {
+    EXPECT_TRUE(names.count(name)) << name;
+  }
+  try {
+    find_preset("syn_walking_zigzag");
+    FAIL() << "expected a ConfigError";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("preset"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("syn_walking_xyz"), std::string::npos);
+  }
+  SequenceConfig bad = find_preset("syn_static_xyz").config;
+  bad.depth_stamp_jitter_s = 0.02;
+  EXPECT_THROW(bad.validate(), ConfigError);
+}
+
+TEST(Sequence, MissingBackgroundIsAClearInputError) {
+  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
+  config.background_dir = "/nonexistent/tum_sequence";
+  try {
+    make_sequence_source(config);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/tum_sequence"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ddl::synthetic

@@ -1,0 +1,55 @@
+#pragma once
+// Helpers shared by the synthetic tests.
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "ddl/synthetic/sequence.h"
+
+namespace ddl::synthetic::testing {
+
+inline std::string shared_dir() {
+  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
+  return DDL_DEFAULT_SHARED_DIR;
+}
+
+/// A preset at 320x240 (intrinsics halved), with the shared people photos when present.
+inline SequenceConfig small_config(const std::string& preset, int frames) {
+  SequenceConfig c = find_preset(preset).config;
+  c.frames = frames;
+  c.camera.width = 320;
+  c.camera.height = 240;
+  c.camera.fx /= 2;
+  c.camera.fy /= 2;
+  c.camera.cx = (c.camera.cx + 0.5) / 2 - 0.5;
+  c.camera.cy = (c.camera.cy + 0.5) / 2 - 0.5;
+  c.people_dir = shared_dir() + "/data/people/ccp";
+  return c;
+}
+
+/// A fresh empty temporary folder, removed by the destructor.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& name)
+      : path_(std::filesystem::temp_directory_path() /
+              (name + "_" + std::to_string(static_cast<long long>(::getpid())))) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string str() const { return path_.string(); }
+  std::filesystem::path path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace ddl::synthetic::testing
