@@ -1,0 +1,201 @@
+// LocalMapper end to end on synthetic keyframes: map insertion, BoW, local BA reducing injected
+// pose and point errors, the abort flag, determinism.
+
+#include "ddl/mapping/local_mapper.h"
+
+#include <gtest/gtest.h>
+
+#include "ddl/core/error.h"
+#include "synthetic_world.h"
+
+namespace ddl::mapping {
+namespace {
+
+using test::SyntheticWorld;
+
+struct MappingRun {
+  std::shared_ptr<map::Map> map = std::make_shared<map::Map>();
+  std::shared_ptr<vocabulary::BowDatabase> database = std::make_shared<vocabulary::BowDatabase>();
+  std::vector<map::KeyFramePtr> keyframes;
+  std::vector<SE3> truth;    // true T_c_w per keyframe
+  std::vector<SE3> initial;  // injected (estimated) T_c_w per keyframe
+  std::map<map::MapPointId, Vec3d> point_truth;
+  std::map<map::MapPointId, Vec3d> point_initial;
+  LocalMapperStatistics stats;
+};
+
+/// Six keyframes looking at one wall; keyframes 1..5 start 3 cm / 1 degree off (their depth
+/// points inherit the error), keyframe 0 is exact (the gauge).
+MappingRun run_mapping(std::uint64_t seed, const LocalMapperConfig& config, bool with_bow,
+                       const std::atomic<bool>* abort = nullptr,
+                       const test::ViewOptions& options = {}) {
+  MappingRun run;
+  std::mt19937_64 rng(seed);
+  SyntheticWorld world;
+  world.points = SyntheticWorld::room(2000, 2.5, 1.5, rng);
+  world.train_vocabulary(rng);
+  test::FakeTracker tracker(run.map, world, /*track_window=*/10);
+  LocalMapper mapper(config, world.camera, run.map, world.vocabulary, run.database);
+  for (int k = 0; k < 6; ++k) {
+    const SE3 T_true =
+        test::look_along(Vec3d(0.12 * k, 0.02 * k, 0.04 * k), test::rad(3.0 * k - 6.0));
+    SE3 T_est = T_true;
+    if (k > 0) {
+      const Vec3d dir = Vec3d(test::gaussian(rng), test::gaussian(rng), test::gaussian(rng));
+      const Vec3d axis = Vec3d(test::gaussian(rng), test::gaussian(rng), test::gaussian(rng));
+      const SE3 T_w_c = T_true.inverse();
+      T_est = SE3(T_w_c.rotation() * so3_exp(axis.normalized() * test::rad(1.0)),
+                  T_w_c.translation() + 0.03 * dir.normalized())
+                  .inverse();
+    }
+    test::View view = world.observe(T_true, rng, options, with_bow);
+    map::KeyFramePtr kf = tracker.make_keyframe(view, T_est, k);
+    for (const map::MapPointPtr& p : kf->map_point_set()) {
+      const int wp = tracker.truth_of(p->id());
+      // Only points placed by the perturbed keyframes (keyframe 0's are exact up to noise).
+      if (k == 0 || wp < 0 || run.point_initial.count(p->id()) != 0) continue;
+      if (p->first_keyframe_id() != kf->id()) continue;
+      run.point_truth[p->id()] = world.points[static_cast<std::size_t>(wp)].p_w;
+      run.point_initial[p->id()] = p->position_w();
+    }
+    run.keyframes.push_back(kf);
+    run.truth.push_back(T_true);
+    run.initial.push_back(T_est);
+    EXPECT_EQ(mapper.process(kf, abort), kf);
+  }
+  run.stats = mapper.statistics();
+  return run;
+}
+
+double mean_center_error(const MappingRun& run, bool initial) {
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t k = 1; k < run.keyframes.size(); ++k) {
+    if (run.keyframes[k]->is_bad()) continue;
+    const SE3 T = initial ? run.initial[k] : run.keyframes[k]->T_c_w();
+    sum += test::center_error_m(T, run.truth[k]);
+    ++n;
+  }
+  return sum / n;
+}
+
+double mean_rotation_error_deg(const MappingRun& run, bool initial) {
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t k = 1; k < run.keyframes.size(); ++k) {
+    if (run.keyframes[k]->is_bad()) continue;
+    const SE3 T = initial ? run.initial[k] : run.keyframes[k]->T_c_w();
+    sum += test::rotation_error_deg(T, run.truth[k]);
+    ++n;
+  }
+  return sum / n;
+}
+
+double median_point_error(const MappingRun& run, bool initial) {
+  std::vector<double> errors;
+  for (const auto& [id, truth] : run.point_truth) {
+    if (initial) {
+      errors.push_back((run.point_initial.at(id) - truth).norm());
+      continue;
+    }
+    for (const map::MapPointPtr& p : run.map->map_points()) {
+      if (p->id() == id) errors.push_back((p->position_w() - truth).norm());
+    }
+  }
+  std::sort(errors.begin(), errors.end());
+  return errors.empty() ? 1e9 : errors[errors.size() / 2];
+}
+
+LocalMapperConfig test_config() {
+  LocalMapperConfig config;
+  config.bow_levels_up = 2;                 // the test vocabulary has 3 levels
+  config.keyframe_culling.enabled = false;  // keep every keyframe to measure its pose
+  return config;
+}
+
+TEST(LocalMapper, LocalBundleAdjustmentRemovesInjectedErrors) {
+  const MappingRun run = run_mapping(21, test_config(), /*with_bow=*/true);
+  EXPECT_EQ(run.map->keyframe_count(), 6u);
+  EXPECT_EQ(run.database->size(), 6u);
+  EXPECT_GE(run.stats.local_ba_runs, 4u);
+
+  const double center_before = mean_center_error(run, true);
+  const double center_after = mean_center_error(run, false);
+  const double rot_before = mean_rotation_error_deg(run, true);
+  const double rot_after = mean_rotation_error_deg(run, false);
+  const double point_before = median_point_error(run, true);
+  const double point_after = median_point_error(run, false);
+  RecordProperty("center_error_before_m", std::to_string(center_before));
+  RecordProperty("center_error_after_m", std::to_string(center_after));
+  EXPECT_NEAR(center_before, 0.03, 1e-9);
+  EXPECT_LT(center_after, 0.005) << "before " << center_before;
+  EXPECT_LT(rot_after, 0.15) << "before " << rot_before;
+  // Points back-projected from the perturbed keyframes start centimetres off.
+  EXPECT_GT(point_before, 0.03);
+  EXPECT_LT(point_after, 0.3 * point_before);
+  EXPECT_LT(point_after, 0.015);
+  // The first keyframe is the gauge and does not move.
+  EXPECT_EQ(run.keyframes[0]->T_c_w().translation(), run.truth[0].translation());
+}
+
+TEST(LocalMapper, ComputesMissingBowAndConnectsKeyframes) {
+  test::ViewOptions options;
+  options.no_depth_fraction = 0.3;  // features without depth are left to triangulation
+  const MappingRun run = run_mapping(22, test_config(), /*with_bow=*/false, nullptr, options);
+  for (const map::KeyFramePtr& kf : run.keyframes) {
+    EXPECT_TRUE(kf->has_bow());
+    EXPECT_FALSE(kf->feature_vector().empty());
+    EXPECT_TRUE(run.database->contains(kf->id()));
+    EXPECT_FALSE(kf->covisibles().empty());
+  }
+  for (std::size_t k = 1; k < run.keyframes.size(); ++k) EXPECT_TRUE(run.keyframes[k]->parent());
+  EXPECT_GT(run.stats.points_created, 0u);
+}
+
+TEST(LocalMapper, RaisedAbortSkipsFusionBundleAdjustmentAndCulling) {
+  std::atomic<bool> abort{true};
+  LocalMapperConfig config = test_config();
+  config.keyframe_culling.enabled = true;
+  const MappingRun run = run_mapping(23, config, true, &abort);
+  EXPECT_EQ(run.stats.local_ba_runs, 0u);
+  EXPECT_EQ(run.stats.points_fused, 0u);
+  EXPECT_EQ(run.stats.keyframes_culled, 0u);
+  EXPECT_EQ(run.stats.keyframes_processed, 6u);
+  // Errors are untouched.
+  EXPECT_NEAR(mean_center_error(run, false), 0.03, 1e-9);
+}
+
+TEST(LocalMapper, SameInputGivesIdenticalMap) {
+  const MappingRun a = run_mapping(24, test_config(), true);
+  const MappingRun b = run_mapping(24, test_config(), true);
+  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
+  for (std::size_t k = 0; k < a.keyframes.size(); ++k) {
+    EXPECT_EQ(a.keyframes[k]->T_c_w().translation(), b.keyframes[k]->T_c_w().translation());
+    EXPECT_EQ(a.keyframes[k]->T_c_w().quaternion().coeffs(),
+              b.keyframes[k]->T_c_w().quaternion().coeffs());
+  }
+  const auto pa = a.map->map_points();
+  const auto pb = b.map->map_points();
+  ASSERT_EQ(pa.size(), pb.size());
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    EXPECT_EQ(pa[i]->id(), pb[i]->id());
+    EXPECT_EQ(pa[i]->position_w(), pb[i]->position_w());
+  }
+  EXPECT_EQ(a.stats.points_created, b.stats.points_created);
+  EXPECT_EQ(a.stats.points_fused, b.stats.points_fused);
+}
+
+TEST(LocalMapper, RejectsInvalidConfig) {
+  LocalMapperConfig config;
+  config.triangulation.max_hamming = -1;
+  std::mt19937_64 rng(1);
+  SyntheticWorld world;
+  world.points = SyntheticWorld::room(200, 2.5, 1.5, rng);
+  world.train_vocabulary(rng);
+  EXPECT_THROW(LocalMapper(config, world.camera, std::make_shared<map::Map>(), world.vocabulary,
+                           std::make_shared<vocabulary::BowDatabase>()),
+               ConfigError);
+}
+
+}  // namespace
+}  // namespace ddl::mapping
