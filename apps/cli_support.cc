@@ -25,8 +25,7 @@ extern "C" void on_signal(int) {
 }
 
 double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
@@ -65,7 +64,10 @@ const std::atomic<bool>& install_stop_handler() {
 }
 
 Progress::Progress(std::string label, std::size_t total)
-    : label_(std::move(label)), total_(total), tty_(isatty(STDERR_FILENO) != 0), start_s_(now_s()) {}
+    : label_(std::move(label)),
+      total_(total),
+      tty_(isatty(STDERR_FILENO) != 0),
+      start_s_(now_s()) {}
 
 Progress::~Progress() {
   if (tty_ && !finished_ && last_print_s_ > -1e9) std::fputc('\n', stderr);

@@ -4,9 +4,8 @@
 // axis), metres; pixel (u, v) with (0, 0) the centre of the top-left pixel.
 // Immutable value type: safe to share between threads.
 
-#include <opencv2/core.hpp>
-
 #include <array>
+#include <opencv2/core.hpp>
 #include <string>
 
 #include "ddl/core/types.h"
@@ -14,16 +13,16 @@
 namespace ddl::camera {
 
 struct PinholeCamera {
-  std::string name = "unnamed";  // e.g. "tum1", shown in logs and summaries
-  int width = 640;               // image width in pixels
-  int height = 480;              // image height in pixels
-  double fx = 525.0;             // focal length in pixels, x
-  double fy = 525.0;             // focal length in pixels, y
-  double cx = 319.5;             // principal point, x
-  double cy = 239.5;             // principal point, y
+  std::string name = "unnamed";                     // e.g. "tum1", shown in logs and summaries
+  int width = 640;                                  // image width in pixels
+  int height = 480;                                 // image height in pixels
+  double fx = 525.0;                                // focal length in pixels, x
+  double fy = 525.0;                                // focal length in pixels, y
+  double cx = 319.5;                                // principal point, x
+  double cy = 239.5;                                // principal point, y
   std::array<double, 5> distortion{0, 0, 0, 0, 0};  // k1 k2 p1 p2 k3 (OpenCV order)
-  double depth_factor = 5000.0;  // raw 16-bit depth value per metre (TUM: 5000)
-  double fps = 30.0;             // nominal frame rate, Hz
+  double depth_factor = 5000.0;                     // raw 16-bit depth value per metre (TUM: 5000)
+  double fps = 30.0;                                // nominal frame rate, Hz
 
   bool has_distortion() const;
   /// Throws ddl::ConfigError naming the field when a value is out of range.

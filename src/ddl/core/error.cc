@@ -6,8 +6,7 @@ InputError InputError::at(const std::string& file, const std::string& what) {
   return InputError(fmt::format("{}: {}", file, what));
 }
 
-InputError InputError::at_line(const std::string& file, std::size_t line,
-                               const std::string& what) {
+InputError InputError::at_line(const std::string& file, std::size_t line, const std::string& what) {
   return InputError(fmt::format("{}:{}: {}", file, line, what));
 }
 

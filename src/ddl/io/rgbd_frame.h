@@ -2,9 +2,8 @@
 // One RGB-D observation as the pipeline consumes it: undistorted colour and metric depth,
 // registered to the colour camera.
 
-#include <opencv2/core.hpp>
-
 #include <cstddef>
+#include <opencv2/core.hpp>
 #include <string>
 
 namespace ddl::io {

@@ -23,7 +23,8 @@ StampedPose::StampedPose(double stamp, const SE3& T_w_c)
              T_w_c.quaternion().w()) {}
 
 SE3 StampedPose::T_w_c() const {
-  if (q_xyzw.norm() == 0.0) throw Error(fmt::format("pose at {} has a zero quaternion", timestamp_s));
+  if (q_xyzw.norm() == 0.0)
+    throw Error(fmt::format("pose at {} has a zero quaternion", timestamp_s));
   return SE3(Quatd(q_xyzw[3], q_xyzw[0], q_xyzw[1], q_xyzw[2]), t_w_c);
 }
 
@@ -51,10 +52,9 @@ Trajectory read_tum_trajectory(const std::string& path) {
       if (!std::isfinite(x)) throw InputError::at_line(path, row.line, "infinite value");
     }
     if (!out.empty() && v[0] <= out.back().timestamp_s) {
-      throw InputError::at_line(
-          path, row.line,
-          fmt::format("timestamp {} does not increase (previous {})", row.fields[0],
-                      out.back().timestamp_s));
+      throw InputError::at_line(path, row.line,
+                                fmt::format("timestamp {} does not increase (previous {})",
+                                            row.fields[0], out.back().timestamp_s));
     }
     StampedPose p;
     p.timestamp_s = v[0];

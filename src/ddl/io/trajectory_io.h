@@ -15,8 +15,8 @@ namespace ddl::io {
 
 struct StampedPose {
   double timestamp_s = 0.0;
-  Vec3d t_w_c = Vec3d::Zero();                 // camera position in the world frame
-  Vec4d q_xyzw = Vec4d(0.0, 0.0, 0.0, 1.0);    // orientation as written in the file (qx qy qz qw)
+  Vec3d t_w_c = Vec3d::Zero();               // camera position in the world frame
+  Vec4d q_xyzw = Vec4d(0.0, 0.0, 0.0, 1.0);  // orientation as written in the file (qx qy qz qw)
 
   StampedPose() = default;
   StampedPose(double stamp, const SE3& T_w_c);

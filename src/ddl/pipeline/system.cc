@@ -14,6 +14,9 @@ void SystemConfig::validate() const {
   if (keyframe_queue_capacity == 0) {
     throw ConfigError::for_key("keyframe_queue_capacity", "must be at least 1");
   }
+  if (deterministic_mapping_busy_frames < 0) {
+    throw ConfigError::for_key("deterministic_mapping_busy_frames", "must be >= 0");
+  }
   tracking.validate();
   mapping.validate();
   loop.validate();
@@ -51,6 +54,7 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
         std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
     loop_queue_ = std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
     loop_closer_->set_mapping_pause({[this] {
+                                       abort_local_ba_.store(true);  // end a running local BA
                                        std::unique_lock lock(pause_mutex_);
                                        ++pause_requests_;
                                        pause_cv_.wait(lock, [&] { return !mapping_in_progress_; });
@@ -116,7 +120,10 @@ FrameOutcome System::process(const io::RgbdFrame& frame) {
   if (config_.mode == RunMode::kThreaded) {
     status.queued_keyframes = mapping_queue_->size();
     status.accepts_keyframes = status.queued_keyframes == 0 && !mapper_busy_.load();
+  } else {
+    status.accepts_keyframes = frames_since_keyframe_ >= config_.deterministic_mapping_busy_frames;
   }
+  ++frames_since_keyframe_;
   tracking::TrackingResult& result = outcome.tracking;
   result = tracker_->track(frame, outcome.masks.exclusion, status);
   timings_.record("tracking", result.timings.total_ms);
@@ -152,6 +159,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame) {
 
   if (result.new_keyframe) {
     ++stats_.keyframes_created;
+    frames_since_keyframe_ = 0;
     dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m);
     dense_->submit({result.new_keyframe, frame.rgb, frame.depth_m, outcome.masks.combined});
     if (config_.mode == RunMode::kDeterministic) {

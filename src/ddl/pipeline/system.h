@@ -111,6 +111,7 @@ class System {
   std::optional<SE3> last_T_c_w_;
   std::optional<SE3> velocity_;  // T_c(k) c(k-1)
   map::KeyFramePtr last_reference_;
+  int frames_since_keyframe_ = 1 << 20;  // deterministic mapping-busy emulation
   TimingStats timings_;
   SystemStatistics stats_;
 

@@ -37,7 +37,12 @@ struct DynamicConfig {
 struct SystemConfig {
   RunMode mode = RunMode::kDeterministic;   // see System
   std::size_t keyframe_queue_capacity = 4;  // bounded queues between stages (threaded mode)
-  tracking::TrackerConfig tracking;         // includes ORB extraction (tracking.orb)
+  /// Deterministic mode: local mapping runs inline, so it is never busy and tracking would insert
+  /// a keyframe on almost every frame. To keep ORB-SLAM2's keyframe rate reproducibly, mapping
+  /// reports itself busy for this many frames after each keyframe (about its processing time at
+  /// 30 Hz). 0 = always idle.
+  int deterministic_mapping_busy_frames = 4;
+  tracking::TrackerConfig tracking;  // includes ORB extraction (tracking.orb)
   mapping::LocalMapperConfig mapping;
   loop::LoopCloserConfig loop;
   DynamicConfig dynamic;

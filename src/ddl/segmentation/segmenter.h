@@ -32,7 +32,7 @@ struct SegmenterConfig {
   std::string model_path = "models/espnetv2_s2.0_voc_512x384.onnx";  // relative to the shared dir
   int input_width = 512;  // network input size in pixels (the ONNX files have fixed sizes)
   int input_height = 384;
-  std::vector<std::string> class_names = voc_class_names();  // label index -> name
+  std::vector<std::string> class_names = voc_class_names();              // label index -> name
   std::vector<std::string> dynamic_classes = default_dynamic_classes();  // masked as dynamic
   int num_threads = 1;      // OpenCV dnn threads (cv::setNumThreads is process-wide: see docs)
   std::string mask_folder;  // kFolder: where the precomputed masks are

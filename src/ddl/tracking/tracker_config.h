@@ -15,7 +15,8 @@ struct FrameConfig {
   double close_depth_baselines = 40.0;  // "close" points: depth < this * bf / fx (ThDepth)
   double min_depth_m = 0.1;             // depth readings at or below this are ignored [m]
   double max_depth_m = 10.0;            // depth readings above this are ignored [m]
-  int bow_levels_up = 4;  // direct index nodes this many levels above the words (ORB-SLAM2: 4)
+  int bow_levels_up = 3;  // direct index nodes this many levels above the words (depth 2 of the
+                          // default 5-level vocabulary, as ORB-SLAM2: 4 of 6)
 };
 
 /// Frame-to-frame and frame-to-map matching (ORB-SLAM2 Tracking::TrackWithMotionModel,
