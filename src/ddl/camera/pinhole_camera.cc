@@ -45,10 +45,15 @@ Undistorter::Undistorter(const PinholeCamera& camera) : active_(camera.has_disto
   if (!active_) return;
   const cv::Mat K(camera.K());
   const cv::Mat dist(1, 5, CV_64F, const_cast<double*>(camera.distortion.data()));
-  // Fixed-point maps (CV_16SC2 + interpolation table): remap runs about twice as fast as with
-  // float maps, at 1/32 pixel interpolation precision.
+  // Fixed-point maps run remap about twice as fast as float maps: for colour, integer positions
+  // plus a 1/32-pixel interpolation table; for depth, positions rounded to the nearest pixel
+  // (nninterpolation), so depth values are never blended and match a float-map nearest lookup.
+  cv::Mat map_x, map_y;
   cv::initUndistortRectifyMap(K, dist, cv::Mat(), K, cv::Size(camera.width, camera.height),
-                              CV_16SC2, map_xy_, map_interpolation_);
+                              CV_32FC1, map_x, map_y);
+  cv::convertMaps(map_x, map_y, map_xy_, map_interpolation_, CV_16SC2, false);
+  cv::Mat unused;
+  cv::convertMaps(map_x, map_y, map_nearest_, unused, CV_16SC2, true);
 }
 
 cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {
@@ -61,7 +66,7 @@ cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {
 cv::Mat Undistorter::undistort_depth(const cv::Mat& depth) const {
   if (!active_) return depth;
   cv::Mat out;
-  cv::remap(depth, out, map_xy_, map_interpolation_, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  cv::remap(depth, out, map_nearest_, cv::Mat(), cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   return out;
 }
 

@@ -58,7 +58,8 @@ class Undistorter {
 
  private:
   bool active_ = false;
-  cv::Mat map_xy_, map_interpolation_;  // fixed-point remap maps (CV_16SC2, CV_16UC1)
+  cv::Mat map_xy_, map_interpolation_;  // fixed-point colour maps (CV_16SC2, CV_16UC1)
+  cv::Mat map_nearest_;                 // fixed-point depth map, rounded positions (CV_16SC2)
 };
 
 }  // namespace ddl::camera
