@@ -87,24 +87,31 @@ std::shared_ptr<KeyFrame> MapPoint::reference_keyframe() const {
 }
 
 cv::Mat MapPoint::descriptor() const {
+  // A private copy: cv::Mat reference counts are updated inside OpenCV, where ThreadSanitizer
+  // cannot see their atomics, so no descriptor buffer is shared between threads.
   std::lock_guard lock(mutex_);
-  return descriptor_;
+  if (!has_descriptor_) return {};
+  cv::Mat out(1, static_cast<int>(descriptor_.size()), CV_8UC1);
+  std::copy(descriptor_.begin(), descriptor_.end(), out.ptr<std::uint8_t>());
+  return out;
 }
 
 void MapPoint::compute_distinctive_descriptor() {
-  std::vector<cv::Mat> descriptors;
-  for (const Observation& obs : observations()) {
+  // Keyframe features are immutable and the observations keep their keyframes alive, so raw
+  // row pointers stay valid here (and no cv::Mat header is shared across threads).
+  const std::vector<Observation> observations = this->observations();
+  std::vector<const std::uint8_t*> descriptors;
+  for (const Observation& obs : observations) {
     if (obs.keyframe->is_bad()) continue;
-    descriptors.push_back(
-        obs.keyframe->features().descriptors.row(static_cast<int>(obs.feature_index)));
+    descriptors.push_back(obs.keyframe->features().descriptors.ptr<std::uint8_t>(
+        static_cast<int>(obs.feature_index)));
   }
   if (descriptors.empty()) return;
   const std::size_t n = descriptors.size();
   std::vector<int> distances(n * n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = i + 1; j < n; ++j) {
-      const int d = features::hamming_distance(descriptors[i].ptr<std::uint8_t>(),
-                                               descriptors[j].ptr<std::uint8_t>());
+      const int d = features::hamming_distance(descriptors[i], descriptors[j]);
       distances[i * n + j] = d;
       distances[j * n + i] = d;
     }
@@ -123,7 +130,8 @@ void MapPoint::compute_distinctive_descriptor() {
     }
   }
   std::lock_guard lock(mutex_);
-  descriptor_ = descriptors[best].clone();
+  std::copy(descriptors[best], descriptors[best] + descriptor_.size(), descriptor_.begin());
+  has_descriptor_ = true;
 }
 
 void MapPoint::update_normal_and_depth() {

@@ -5,7 +5,9 @@
 // Thread-safety: every method locks the point's own mutex; any thread may call any method.
 // Observations hold keyframes weakly; the Map owns entities.
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -105,7 +107,8 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   Vec3d normal_w_ = Vec3d::Zero();
   double min_distance_ = 0.0;
   double max_distance_ = 0.0;
-  cv::Mat descriptor_;
+  std::array<std::uint8_t, 32> descriptor_{};  // 256-bit ORB descriptor
+  bool has_descriptor_ = false;
   std::map<KeyFrameId, Obs> observations_;
   int num_obs_ = 0;
   std::weak_ptr<KeyFrame> reference_keyframe_;
