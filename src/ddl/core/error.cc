@@ -14,4 +14,13 @@ ConfigError ConfigError::for_key(const std::string& key, const std::string& what
   return ConfigError(fmt::format("configuration key '{}': {}", key, what));
 }
 
+ConfigError ConfigError::with_key_prefix(const std::string& prefix) const {
+  std::string message = what();
+  const std::string marker = "key '";
+  if (const auto pos = message.find(marker); pos != std::string::npos) {
+    message.insert(pos + marker.size(), prefix);
+  }
+  return ConfigError(message);
+}
+
 }  // namespace ddl

@@ -29,6 +29,9 @@ class ConfigError : public Error {
  public:
   using Error::Error;
   static ConfigError for_key(const std::string& key, const std::string& what);
+  /// The same error with `prefix` put before the key it names ("optimizer.x" ->
+  /// "loop.optimizer.x"), for a config struct validated inside an enclosing one.
+  ConfigError with_key_prefix(const std::string& prefix) const;
 };
 
 /// Thrown by a pipeline that was asked to stop (Ctrl-C); outputs so far have been flushed.

@@ -66,12 +66,7 @@ void LoopCloserConfig::validate() const {
     optimizer.validate();
   } catch (const ConfigError& e) {
     // OptimizerConfig names its keys "optimizer.<field>"; here they live under "loop.".
-    std::string message = e.what();
-    const std::string marker = "key '";
-    if (const auto pos = message.find(marker); pos != std::string::npos) {
-      message.insert(pos + marker.size(), "loop.");
-    }
-    throw ConfigError(message);
+    throw e.with_key_prefix("loop.");
   }
 }
 

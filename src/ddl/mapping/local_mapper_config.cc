@@ -81,12 +81,7 @@ void LocalMapperConfig::validate() const {
     optimizer.validate();
   } catch (const ConfigError& e) {
     // OptimizerConfig names its keys "optimizer.<field>"; here they live under "mapping.".
-    std::string message = e.what();
-    const std::string marker = "key '";
-    if (const auto pos = message.find(marker); pos != std::string::npos) {
-      message.insert(pos + marker.size(), "mapping.");
-    }
-    throw ConfigError(message);
+    throw e.with_key_prefix("mapping.");
   }
 }
 

@@ -104,12 +104,7 @@ void TrackerConfig::validate() const {
     try {
       config.validate();
     } catch (const ConfigError& e) {
-      std::string message = e.what();
-      const std::string marker = "key '";
-      if (const auto pos = message.find(marker); pos != std::string::npos) {
-        message.insert(pos + marker.size(), "tracking.");
-      }
-      throw ConfigError(message);
+      throw e.with_key_prefix("tracking.");
     }
   };
   nested(orb);
