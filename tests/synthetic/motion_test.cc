@@ -89,7 +89,7 @@ TEST(Motion, CamerasStayInsideTheRoomAwayFromWalls) {
     MotionConfig config;
     config.type = preset.config.motion;
     config.seed = preset.config.seed;
-    config.loop_period_s = (preset.config.frames - 1) / 30.0;
+    config.loop_period_s = (preset.config.frames - 1) / 30.0 / preset.config.loop_turns;
     for (int i = 0; i < preset.config.frames; i += 5) {
       const Vec3d p = camera_pose(config, i / 30.0).translation();
       EXPECT_GT(p.x(), 0.6) << preset.name;

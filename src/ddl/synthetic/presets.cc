@@ -81,6 +81,10 @@ void SequenceConfig::validate() const {
     throw ConfigError::for_key("object_move_duration_s",
                                fmt::format("must be > 0 (got {})", object_move_duration_s));
   }
+  if (!(loop_turns >= 0.1 && loop_turns <= 10)) {
+    throw ConfigError::for_key("loop_turns",
+                               fmt::format("must be in [0.1, 10] (got {})", loop_turns));
+  }
   if (!(rgb_noise_sigma >= 0 && rgb_noise_sigma <= 50)) {
     throw ConfigError::for_key("rgb_noise_sigma",
                                fmt::format("must be in [0, 50] (got {})", rgb_noise_sigma));
@@ -124,6 +128,7 @@ nlohmann::json SequenceConfig::to_json() const {
                    {"frames", frames},
                    {"seed", seed},
                    {"motion", to_string(motion)},
+                   {"loop_turns", loop_turns},
                    {"people", to_string(people)},
                    {"moving_object", moving_object},
                    {"object_move_start_s", object_move_start_s},
@@ -203,10 +208,13 @@ const std::vector<Preset>& presets() {
     add("syn_static_rpy", "static room control, rpy motion", M::kRpy, P::kNone, 800, 113);
     add("syn_static_halfsphere", "static room control, half-sphere motion", M::kHalfsphere,
         P::kNone, 800, 114);
+    // 1.2 turns at 900 frames per turn: the last 180 frames revisit the start, so that several
+    // consecutive keyframes see the mapped place again (ORB-SLAM2's loop consistency rule).
     add("syn_static_loop",
-        "static room; the camera walks once around the room and returns to its start (loop "
-        "closure)",
-        M::kLoop, P::kNone, 900, 115);
+        "static room; the camera walks around the room, returns to its start and goes on for a "
+        "fifth of a turn (loop closure)",
+        M::kLoop, P::kNone, 1080, 115);
+    out.back().config.loop_turns = 1.2;
     add("composite_fr1_rpy_walking",
         "real TUM fr1_rpy frames with two real people walking sideways in front of the desk",
         M::kStatic, P::kWalking, 0, 121);

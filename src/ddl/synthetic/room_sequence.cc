@@ -47,7 +47,7 @@ class RoomSequence final : public SequenceSource {
       motion_.base_position_w = Vec3d(3.0, 2.0, 1.4);
       motion_.look_at_w = Vec3d(3.05, 4.3, 0.95);
     }
-    motion_.loop_period_s = std::max(1, config.frames - 1) / config.camera.fps;
+    motion_.loop_period_s = std::max(1, config.frames - 1) / config.camera.fps / config.loop_turns;
 
     const int count = config.people == PeopleScenario::kNone         ? 0
                       : config.people == PeopleScenario::kDeskPerson ? 1

@@ -60,7 +60,11 @@ struct SequenceConfig {
   std::string name = "syn_custom";  // sequence name (folder name in a suite)
   int frames = 900;                 // number of frames (composite: at most this many, <= 0 = all)
   std::uint64_t seed = 1;           // everything random derives from it
-  MotionType motion = MotionType::kXyz;           // synthetic rooms: camera motion
+  MotionType motion = MotionType::kXyz;  // synthetic rooms: camera motion
+  /// Loop motion: turns around the room over the whole sequence. 1 = the last pose is the first;
+  /// more = the end of the sequence revisits the start (loop detection needs several keyframes
+  /// in the revisited place).
+  double loop_turns = 1.0;
   PeopleScenario people = PeopleScenario::kNone;  // who is in the scene
   bool moving_object = false;           // a box on the desk is picked up and put down elsewhere
   double object_move_start_s = 12.0;    // when the box starts moving
