@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
 #include "ddl/loop/global_ba.h"
@@ -52,6 +54,39 @@ LoopCloser::~LoopCloser() {
 
 void LoopCloser::set_mapping_pause(MappingPause hooks) { pause_ = std::move(hooks); }
 
+void LoopCloser::request_reset(map::KeyFrameId first_valid_keyframe) {
+  std::lock_guard lock(reset_mutex_);
+  pending_reset_ = first_valid_keyframe;
+}
+
+void LoopCloser::apply_pending_reset() {
+  std::optional<map::KeyFrameId> reset;
+  {
+    std::lock_guard lock(reset_mutex_);
+    std::swap(reset, pending_reset_);
+  }
+  if (!reset) return;
+  first_valid_keyframe_ = std::max(first_valid_keyframe_, *reset);
+  detector_.reset(first_valid_keyframe_);
+}
+
+bool LoopCloser::confirmed_by_covisibles(const map::KeyFramePtr& keyframe,
+                                         const LoopMatch& loop) const {
+  const auto needed = static_cast<std::size_t>(config_.detection.covisible_confirmations);
+  const std::vector<map::KeyFramePtr> neighbours = keyframe->best_covisibles(needed);
+  std::string counts;
+  std::size_t confirmed = 0;
+  for (const map::KeyFramePtr& neighbour : neighbours) {
+    const int inliers = confirm_loop_in(neighbour, keyframe, loop, camera_, config_.verification,
+                                        config_.optimizer);
+    counts += fmt::format(" {}:{}", neighbour->id(), inliers);
+    if (inliers >= config_.verification.min_confirmation_inliers) ++confirmed;
+  }
+  spdlog::debug("loop confirmation: keyframe {} vs {}: inliers in covisibles{} ({} of {} needed)",
+                keyframe->id(), loop.matched->id(), counts, confirmed, needed);
+  return confirmed >= needed;
+}
+
 void LoopCloser::release(const map::KeyFramePtr& keyframe) {
   keyframe->set_not_erase(false);
   // Culling that was deferred while the keyframe was protected happens now.
@@ -63,13 +98,21 @@ void LoopCloser::release(const map::KeyFramePtr& keyframe) {
 
 LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   rethrow_global_ba_error();
+  apply_pending_reset();
   LoopResult result;
   if (!config_.enabled || !keyframe || keyframe->is_bad()) return result;
+  if (keyframe->id() < first_valid_keyframe_) return result;
   result.keyframe = keyframe->id();
 
   Stopwatch watch;
   keyframe->set_not_erase(true);
-  const std::vector<map::KeyFramePtr> candidates = detector_.detect(keyframe);
+  const LoopDetector::Detection detection = detector_.detect(keyframe);
+  const bool try_pending =
+      config_.detection.covisible_confirmations > 0 && !detection.pending.empty();
+  std::vector<map::KeyFramePtr> candidates = detection.consistent;
+  if (try_pending) {
+    candidates.insert(candidates.end(), detection.pending.begin(), detection.pending.end());
+  }
   result.candidates = candidates.size();
   if (candidates.empty()) {
     release(keyframe);
@@ -77,8 +120,17 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
     return result;
   }
   for (const map::KeyFramePtr& kf : candidates) kf->set_not_erase(true);
-  std::optional<LoopMatch> loop = verify_loop_candidates(keyframe, candidates, camera_,
-                                                         config_.verification, config_.optimizer);
+  std::optional<LoopMatch> loop;
+  if (!detection.consistent.empty()) {
+    loop = verify_loop_candidates(keyframe, detection.consistent, camera_, config_.verification,
+                                  config_.optimizer);
+  }
+  if (!loop && try_pending) {
+    // Not consistent over time yet: accepted when the covisibles confirm the loop geometrically.
+    loop = verify_loop_candidates(keyframe, detection.pending, camera_, config_.verification,
+                                  config_.optimizer);
+    if (loop && !confirmed_by_covisibles(keyframe, *loop)) loop.reset();
+  }
   for (const map::KeyFramePtr& kf : candidates) {
     if (!loop || kf != loop->matched) release(kf);
   }

@@ -4,6 +4,12 @@
 // (loop_verification.h), correction with loop fusion and essential-graph optimisation
 // (loop_corrector.h), then global bundle adjustment (global_ba.h).
 //
+// Acceptance: candidates consistent over consecutive keyframes (ORB-SLAM2's rule) are verified
+// first. RGB-D keyframes are sparse (a keyframe every 1-1.5 s on a slow walk), so a revisit may
+// span fewer keyframes than that rule needs; a candidate that is not consistent yet is therefore
+// also accepted when its verified loop holds in the keyframe's best covisibles as well
+// (ORB-SLAM3's verification in the covisibility graph; detection.covisible_confirmations).
+//
 // Modes: with global_ba_in_background = false (deterministic mode) global BA runs inline in
 // process(). With true (threaded mode) it runs in a thread owned by the LoopCloser; a later loop,
 // stop() or the destructor aborts it through an atomic flag read by a Ceres iteration callback
@@ -11,21 +17,23 @@
 // (global_ba.h), with local mapping held still through the MappingPause hooks.
 //
 // Thread-safety: process() from one thread (the loop thread, or the caller's in deterministic
-// mode); set_mapping_pause() before the first process(); stop(), wait_for_global_ba() and the
-// counters from any thread. Errors of the background global BA are rethrown by the next
-// process() or wait_for_global_ba().
+// mode); set_mapping_pause() before the first process(); stop(), wait_for_global_ba(),
+// request_reset() and the counters from any thread. Errors of the background global BA are rethrown
+// by the next process() or wait_for_global_ba().
 
 #include <atomic>
 #include <exception>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/loop/loop_closer_config.h"
 #include "ddl/loop/loop_corrector.h"
 #include "ddl/loop/loop_detector.h"
+#include "ddl/loop/loop_verification.h"
 #include "ddl/map/map.h"
 #include "ddl/vocabulary/bow_database.h"
 #include "ddl/vocabulary/vocabulary.h"
@@ -72,6 +80,12 @@ class LoopCloser {
 
   void set_mapping_pause(MappingPause hooks);
 
+  /// The tracker cleared the map (TrackingResult::map_reset): before the next keyframe the
+  /// detector forgets its consistent groups, and keyframes with ids below `first_valid_keyframe`
+  /// (made for the old map, possibly still queued) are ignored by process() (ORB-SLAM2
+  /// LoopClosing::RequestReset).
+  void request_reset(map::KeyFrameId first_valid_keyframe);
+
   /// Detects and, when verified, corrects a loop at `keyframe` (processed by local mapping
   /// first: it must have its BoW and be in the database); then global BA inline, or started in
   /// the background.
@@ -91,6 +105,10 @@ class LoopCloser {
   std::size_t global_ba_aborted() const { return global_ba_aborted_.load(); }
 
  private:
+  void apply_pending_reset();
+  /// True when the loop verified at `keyframe` holds in its covisible_confirmations best
+  /// covisibles too (each with >= min_confirmation_inliers inliers).
+  bool confirmed_by_covisibles(const map::KeyFramePtr& keyframe, const LoopMatch& loop) const;
   void release(const map::KeyFramePtr& keyframe);
   void abort_global_ba();
   void join_global_ba();
@@ -104,6 +122,9 @@ class LoopCloser {
   std::shared_ptr<vocabulary::BowDatabase> database_;
   LoopDetector detector_;
   MappingPause pause_;
+  map::KeyFrameId first_valid_keyframe_ = 0;  // older keyframes belong to a cleared map
+  std::mutex reset_mutex_;                    // guards pending_reset_
+  std::optional<map::KeyFrameId> pending_reset_;
 
   std::atomic<std::size_t> loops_closed_{0};
   std::atomic<std::size_t> global_ba_runs_{0};

@@ -40,6 +40,7 @@ void LoopCloserConfig::validate() const {
   require_int(detection.score_covisibles, 0, 1000, d + "score_covisibles");
   require_ratio(detection.min_group_score_ratio, d + "min_group_score_ratio");
   require_int(detection.consistency_threshold, 0, 100, d + "consistency_threshold");
+  require_int(detection.covisible_confirmations, 0, 100, d + "covisible_confirmations");
 
   const std::string v = "loop.verification.";
   require_ratio(verification.bow_ratio, v + "bow_ratio");
@@ -56,6 +57,7 @@ void LoopCloserConfig::validate() const {
   require_int(verification.min_refined_inliers, 3, 100000, v + "min_refined_inliers");
   require_positive(verification.loop_search_radius, v + "loop_search_radius");
   require_int(verification.min_loop_matches, 3, 100000, v + "min_loop_matches");
+  require_int(verification.min_confirmation_inliers, 3, 100000, v + "min_confirmation_inliers");
 
   const std::string c = "loop.correction.";
   require_positive(correction.fuse_radius, c + "fuse_radius");

@@ -20,6 +20,9 @@ struct LoopDetectionConfig {
   double min_group_score_ratio = 0.75;   // groups scoring more than this * the best group's
   int consistency_threshold = 3;  // consecutive earlier keyframes whose candidate groups must agree
                                   // (0: every candidate goes to verification at once)
+  int covisible_confirmations = 2;  // a candidate not consistent yet is accepted when its verified
+                                    // loop also holds in this many best covisibles of the keyframe
+                                    // (ORB-SLAM3; sparse RGB-D keyframes; 0: off)
 };
 
 /// Geometric verification of the candidates (ORB-SLAM2 LoopClosing::ComputeSim3 with the scale
@@ -38,6 +41,7 @@ struct LoopVerificationConfig {
   int min_refined_inliers = 20;          // inliers of the refined pose needed
   double loop_search_radius = 10.0;      // projection search of all loop points (x scale)
   int min_loop_matches = 40;             // matches with the loop points needed to accept
+  int min_confirmation_inliers = 30;     // a covisible confirms a loop with this many inliers
 };
 
 /// Loop correction (ORB-SLAM2 LoopClosing::CorrectLoop and Optimizer::OptimizeEssentialGraph).

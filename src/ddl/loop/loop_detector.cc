@@ -83,7 +83,7 @@ std::vector<map::KeyFramePtr> LoopDetector::candidates(const map::KeyFramePtr& k
   return out;
 }
 
-std::vector<map::KeyFramePtr> LoopDetector::detect(const map::KeyFramePtr& keyframe) {
+LoopDetector::Detection LoopDetector::detect(const map::KeyFramePtr& keyframe) {
   const map::KeyFramePtr first = map_->first_keyframe();
   const map::KeyFrameId since = std::max(last_loop_keyframe_, first ? first->id() : 0);
   if (keyframe->id() < since + static_cast<map::KeyFrameId>(config_.min_keyframes_between_loops)) {
@@ -94,11 +94,12 @@ std::vector<map::KeyFramePtr> LoopDetector::detect(const map::KeyFramePtr& keyfr
     consistent_groups_.clear();
     return {};
   }
+  Detection detection;
 
   // 4. Covisibility consistency with the groups of the previous keyframes.
   std::vector<std::pair<Group, int>> current_groups;
   std::vector<bool> group_extended(consistent_groups_.size(), false);
-  std::vector<map::KeyFramePtr> accepted;
+  std::vector<map::KeyFramePtr>& accepted = detection.consistent;
   for (const map::KeyFramePtr& candidate : found) {
     Group group;
     group.insert(candidate->id());
@@ -124,9 +125,13 @@ std::vector<map::KeyFramePtr> LoopDetector::detect(const map::KeyFramePtr& keyfr
     }
     if (!consistent_with_some) {
       // Threshold 0: every candidate goes to geometric verification at once.
-      if (config_.consistency_threshold == 0 && !enough) accepted.push_back(candidate);
+      if (config_.consistency_threshold == 0 && !enough) {
+        accepted.push_back(candidate);
+        enough = true;
+      }
       current_groups.emplace_back(std::move(group), 0);
     }
+    if (!enough) detection.pending.push_back(candidate);
   }
   consistent_groups_ = std::move(current_groups);
   if (spdlog::should_log(spdlog::level::debug)) {
@@ -137,10 +142,10 @@ std::vector<map::KeyFramePtr> LoopDetector::detect(const map::KeyFramePtr& keyfr
       groups +=
           fmt::format(" [{} keyframes from {}: {}]", group.size(), *group.begin(), consistency);
     }
-    spdlog::debug("loop detection: keyframe {}: candidates{}; groups{}; {} accepted",
+    spdlog::debug("loop detection: keyframe {}: candidates{}; groups{}; {} consistent",
                   keyframe->id(), ids, groups, accepted.size());
   }
-  return accepted;
+  return detection;
 }
 
 }  // namespace ddl::loop

@@ -144,6 +144,21 @@ std::optional<LoopMatch> verify_candidate(const map::KeyFramePtr& current,
 
 }  // namespace
 
+int confirm_loop_in(const map::KeyFramePtr& neighbour, const map::KeyFramePtr& current,
+                    const LoopMatch& loop, const mapping::CameraIntrinsics& camera,
+                    const LoopVerificationConfig& config,
+                    const optimization::OptimizerConfig& optimizer) {
+  if (!neighbour || neighbour->is_bad()) return 0;
+  const SE3 T_n_cur = neighbour->T_c_w() * current->T_c_w().inverse();
+  const SE3 T_n_w = T_n_cur * loop.T_cur_w_corrected;
+  std::vector<map::MapPointPtr> matches(neighbour->features().size());
+  search_by_projection(*neighbour, T_n_w, loop.loop_points, matches, camera,
+                       config.loop_search_radius, config.max_hamming);
+  const int matched = count_matches(matches);
+  if (matched < config.min_refined_inliers) return 0;
+  return refine_pose(*neighbour, T_n_w, matches, camera, optimizer).second;
+}
+
 std::optional<LoopMatch> verify_loop_candidates(const map::KeyFramePtr& current,
                                                 const std::vector<map::KeyFramePtr>& candidates,
                                                 const mapping::CameraIntrinsics& camera,

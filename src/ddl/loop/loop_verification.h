@@ -34,6 +34,16 @@ struct LoopMatch {
   int loop_matches = 0;  ///< matches with the loop points that survive the last refinement
 };
 
+/// Confirms a verified `loop` of `current` in `neighbour`, a covisible keyframe of `current`
+/// (ORB-SLAM3's verification in the covisibility graph, Campos et al., T-RO 2021, section VI-A):
+/// the loop points are projected into `neighbour` at the pose the loop implies for it (its
+/// pose relative to `current` kept), matched as in step 4, and the pose refined. Returns the
+/// inliers of the refinement (0 when it fails).
+int confirm_loop_in(const map::KeyFramePtr& neighbour, const map::KeyFramePtr& current,
+                    const LoopMatch& loop, const mapping::CameraIntrinsics& camera,
+                    const LoopVerificationConfig& config,
+                    const optimization::OptimizerConfig& optimizer);
+
 /// Verifies `candidates` in order against `current`; returns the first that passes.
 std::optional<LoopMatch> verify_loop_candidates(const map::KeyFramePtr& current,
                                                 const std::vector<map::KeyFramePtr>& candidates,

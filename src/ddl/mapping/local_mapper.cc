@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <map>
 
 #include "ddl/core/error.h"
@@ -34,6 +35,22 @@ LocalMapper::LocalMapper(const LocalMapperConfig& config, const camera::PinholeC
   if (!map_ || !vocabulary_ || !database_) {
     throw Error("LocalMapper: map, vocabulary and keyframe database are required");
   }
+}
+
+void LocalMapper::request_reset(map::KeyFrameId first_valid_keyframe) {
+  std::lock_guard lock(reset_mutex_);
+  pending_reset_ = first_valid_keyframe;
+}
+
+void LocalMapper::apply_pending_reset() {
+  std::optional<map::KeyFrameId> reset;
+  {
+    std::lock_guard lock(reset_mutex_);
+    std::swap(reset, pending_reset_);
+  }
+  if (!reset) return;
+  recent_points_.clear();
+  first_valid_keyframe_ = std::max(first_valid_keyframe_, *reset);
 }
 
 void LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
@@ -116,7 +133,8 @@ int LocalMapper::fuse_with_neighbours(const map::KeyFramePtr& keyframe) {
 
 map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
                                       const std::atomic<bool>* abort) {
-  if (!keyframe) return nullptr;
+  apply_pending_reset();
+  if (!keyframe || keyframe->id() < first_valid_keyframe_) return nullptr;
   LocalMapperTimings timings;
   Stopwatch watch;
   insert_keyframe(keyframe);

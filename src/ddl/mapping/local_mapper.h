@@ -12,11 +12,12 @@
 // keyframe is waiting), as ORB-SLAM2 does when new keyframes are queued; local BA also polls it.
 //
 // Thread-safety: process() is called from one thread at a time (the mapping thread, or the
-// caller's thread in deterministic mode); statistics() from any thread.
+// caller's thread in deterministic mode); statistics() and request_reset() from any thread.
 
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/map/map.h"
@@ -65,10 +66,17 @@ class LocalMapper {
   /// early. Returns the keyframe as it should go to loop closing (nullptr if it was culled).
   map::KeyFramePtr process(const map::KeyFramePtr& keyframe, const std::atomic<bool>* abort);
 
+  /// The tracker cleared the map (TrackingResult::map_reset): before the next keyframe the points
+  /// on probation are forgotten, and keyframes with ids below `first_valid_keyframe` (made for
+  /// the old map, possibly still queued) are dropped by process() (ORB-SLAM2
+  /// LocalMapping::RequestReset).
+  void request_reset(map::KeyFrameId first_valid_keyframe);
+
   LocalMapperStatistics statistics() const;
   const LocalMapperConfig& config() const { return config_; }
 
  private:
+  void apply_pending_reset();
   void insert_keyframe(const map::KeyFramePtr& keyframe);
   int fuse_with_neighbours(const map::KeyFramePtr& keyframe);
 
@@ -79,7 +87,10 @@ class LocalMapper {
   std::shared_ptr<const vocabulary::Vocabulary> vocabulary_;
   std::shared_ptr<vocabulary::BowDatabase> database_;
   RecentPoints recent_points_;
+  map::KeyFrameId first_valid_keyframe_ = 0;  // older keyframes belong to a cleared map
 
+  std::mutex reset_mutex_;  // guards pending_reset_
+  std::optional<map::KeyFrameId> pending_reset_;
   mutable std::mutex stats_mutex_;
   LocalMapperStatistics stats_;
 };
