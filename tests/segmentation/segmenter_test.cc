@@ -21,10 +21,10 @@ std::string shared_dir() {
 constexpr char kBasketball[] = "/usr/share/doc/opencv-doc/examples/data/basketball1.png";
 
 TEST(Segmenter, OnnxFindsThePeopleInBasketballPhoto) {
-  const fs::path model = fs::path(shared_dir()) / "models/espnetv2_s2.0_voc_512x384.onnx";
+  SegmenterConfig config;
+  const fs::path model = fs::path(shared_dir()) / config.model_path;
   if (!fs::exists(model)) GTEST_SKIP() << "model not found: " << model;
   if (!fs::exists(kBasketball)) GTEST_SKIP() << "opencv-doc not installed: " << kBasketball;
-  SegmenterConfig config;
   auto segmenter = make_segmenter(config, shared_dir());
   const cv::Mat bgr = cv::imread(kBasketball, cv::IMREAD_COLOR);
   ASSERT_FALSE(bgr.empty());

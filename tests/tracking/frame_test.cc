@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "ddl/core/error.h"
@@ -73,6 +74,60 @@ TEST(FrameTest, DynamicMaskExcludesFeatures) {
                       static_cast<int>(std::lround(kp.pt.y)));
     EXPECT_EQ(mask.at<std::uint8_t>(p), 0) << "keypoint at " << kp.pt;
   }
+}
+
+TEST(FrameTest, DropFeaturesInMaskKeepsTheRestConsistent) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  const io::RgbdFrame& input = room_sequence().frames[0];
+  Frame frame = builder.build(input, cv::Mat(), 0);
+  const Frame reference = builder.build(input, cv::Mat(), 0);
+  cv::Mat mask(input.rgb.size(), CV_8U, cv::Scalar(0));
+  mask(cv::Rect(200, 100, 250, 250)).setTo(255);
+  // Mark every slot with a distinct (dummy) map point to follow the slots through the removal.
+  std::vector<map::MapPointPtr> points;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    points.push_back(
+        std::make_shared<map::MapPoint>(static_cast<map::MapPointId>(i), Vec3d::Zero(), nullptr));
+  }
+  frame.set_map_points(points);
+  frame.set_outlier(0, true);
+
+  std::size_t inside = 0;
+  for (const cv::KeyPoint& kp : reference.features().keypoints) {
+    inside += mask.at<std::uint8_t>(cv::Point(static_cast<int>(std::lround(kp.pt.x)),
+                                              static_cast<int>(std::lround(kp.pt.y)))) != 0;
+  }
+  ASSERT_GT(inside, 50u);
+  EXPECT_EQ(frame.drop_features_in(mask), inside);
+  ASSERT_EQ(frame.size(), reference.size() - inside);
+  const map::FrameFeatures& f = frame.features();
+  ASSERT_EQ(f.descriptors.rows, static_cast<int>(frame.size()));
+  ASSERT_EQ(f.depth_m.size(), frame.size());
+  ASSERT_EQ(f.u_right.size(), frame.size());
+  ASSERT_EQ(f.grid.size(), frame.size());
+  for (std::size_t k = 0; k < frame.size(); ++k) {
+    // Slot k holds the point made for the original index: its keypoint, descriptor and depth.
+    ASSERT_TRUE(frame.map_point(k));
+    const auto i = static_cast<std::size_t>(frame.map_point(k)->id());
+    const map::FrameFeatures& r = reference.features();
+    EXPECT_EQ(f.keypoints[k].pt, r.keypoints[i].pt);
+    EXPECT_EQ(cv::norm(f.descriptors.row(static_cast<int>(k)),
+                       r.descriptors.row(static_cast<int>(i)), cv::NORM_HAMMING),
+              0.0);
+    EXPECT_EQ(f.depth_m[k], r.depth_m[i]);
+    EXPECT_EQ(f.u_right[k], r.u_right[i]);
+    EXPECT_EQ(frame.is_outlier(k), i == 0);
+    EXPECT_EQ(mask.at<std::uint8_t>(cv::Point(static_cast<int>(std::lround(f.keypoints[k].pt.x)),
+                                              static_cast<int>(std::lround(f.keypoints[k].pt.y)))),
+              0);
+  }
+  // The grid indexes the remaining keypoints.
+  const cv::Point2f p = f.keypoints[frame.size() / 2].pt;
+  const std::vector<std::size_t> near = f.grid.features_in_area(p.x, p.y, 1.0f);
+  EXPECT_NE(std::find(near.begin(), near.end(), frame.size() / 2), near.end());
+  EXPECT_EQ(frame.drop_features_in(cv::Mat()), 0u);
+  EXPECT_THROW(frame.drop_features_in(cv::Mat(10, 10, CV_8U)), Error);
 }
 
 TEST(FrameTest, RejectsImagesOfTheWrongTypeOrSize) {

@@ -2,9 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <memory>
+#include <optional>
 #include <vector>
 
+#include "ddl/core/error.h"
 #include "tracking_test_support.h"
 
 namespace ddl::tracking {
@@ -105,6 +110,67 @@ TEST(TrackerTest, SameInputGivesIdenticalTrajectory) {
   }
   EXPECT_EQ(a.map->map_point_count(), b.map->map_point_count());
   EXPECT_EQ(a.keyframes_created, b.keyframes_created);
+}
+
+TEST(TrackerTest, LowCostPoseIsCloseToGroundTruth) {
+  // DDL-SLAM Algorithm 1 with the split API: features once, the low-cost pose (last-frame
+  // matching and motion-only BA, no local map), features of a "moving" region dropped, then the
+  // rest of tracking on the same frame.
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), database);
+  cv::Mat moving(480, 640, CV_8U, cv::Scalar(0));
+  moving(cv::Rect(260, 140, 120, 200)).setTo(255);
+  const MappingStatus idle;
+  double worst_t = 0.0;
+  double worst_r = 0.0;
+  constexpr std::size_t kFrames = 25;
+  for (std::size_t k = 0; k < kFrames; ++k) {
+    Frame frame = tracker.prepare_frame(room_sequence().frames[k], cv::Mat());
+    const std::size_t extracted = frame.size();
+    const std::optional<SE3> T_c_w = tracker.low_cost_pose(frame);
+    if (k == 0) {
+      EXPECT_FALSE(T_c_w) << "no map before the first frame";
+    } else {
+      ASSERT_TRUE(T_c_w) << "frame " << k;
+      const testing::PoseError e = pose_error(T_c_w->inverse(), truth_in_map(k));
+      worst_t = std::max(worst_t, e.translation_m);
+      worst_r = std::max(worst_r, e.rotation_deg);
+      // Measured: at most 2.7 mm and 0.06 degrees; the bounds leave a wide margin.
+      EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
+      EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+    }
+    const std::size_t dropped = tracker.exclude_features(frame, moving);
+    EXPECT_GT(dropped, 20u) << "frame " << k;
+    EXPECT_EQ(frame.size(), extracted - dropped);
+    const TrackingResult r = tracker.track(std::move(frame), idle);
+    ASSERT_TRUE(r.tracked()) << "frame " << k;
+    EXPECT_EQ(r.num_features, extracted - dropped);
+    if (k >= 2) {
+      EXPECT_EQ(r.method, TrackingMethod::kMotionModel) << "frame " << k;
+    }
+    if (r.new_keyframe) associate_keyframe(r.new_keyframe, *database);
+    EXPECT_LT(pose_error(*r.T_w_c, truth_in_map(k)).translation_m, 0.01) << "frame " << k;
+    for (const cv::KeyPoint& kp : tracker.last_frame().features().keypoints) {
+      ASSERT_EQ(moving.at<std::uint8_t>(cv::Point(static_cast<int>(std::lround(kp.pt.x)),
+                                                  static_cast<int>(std::lround(kp.pt.y)))),
+                0);
+    }
+  }
+  std::printf("low-cost pose, worst error over %zu frames: %.2f mm, %.3f deg\n", kFrames - 1,
+              worst_t * 1000.0, worst_r);
+}
+
+TEST(TrackerTest, SplitStepsMustBeCalledOnThePreparedFrame) {
+  auto map = std::make_shared<map::Map>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), nullptr);
+  Frame first = tracker.prepare_frame(room_sequence().frames[0], cv::Mat());
+  Frame second = tracker.prepare_frame(room_sequence().frames[1], cv::Mat());
+  EXPECT_THROW(tracker.track(std::move(first), MappingStatus{}), Error);
+  EXPECT_FALSE(tracker.low_cost_pose(second));  // not initialized yet
+  EXPECT_TRUE(tracker.track(std::move(second), MappingStatus{}).tracked());
 }
 
 io::RgbdFrame blank_frame(std::size_t index, double stamp) {

@@ -1,9 +1,24 @@
 #include "ddl/core/timing.h"
 
+#include <time.h>
+
 #include <algorithm>
 #include <numeric>
 
 namespace ddl {
+namespace {
+
+double clock_ms(clockid_t clock) {
+  timespec t{};
+  clock_gettime(clock, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+}  // namespace
+
+double thread_cpu_ms() { return clock_ms(CLOCK_THREAD_CPUTIME_ID); }
+
+double process_cpu_ms() { return clock_ms(CLOCK_PROCESS_CPUTIME_ID); }
 
 double median(std::vector<double> values) {
   if (values.empty()) return 0.0;

@@ -24,6 +24,11 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
+/// CPU time used so far by the calling thread / by the whole process, in milliseconds: what a
+/// stage costs, independent of other processes competing for the cores (wall time is not).
+double thread_cpu_ms();
+double process_cpu_ms();
+
 struct StageSummary {
   std::size_t count = 0;
   double median_ms = 0.0;

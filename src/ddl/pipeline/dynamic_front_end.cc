@@ -12,6 +12,12 @@ void DynamicConfig::validate() const {
   if (feature_border_px < 0 || feature_border_px > 50) {
     throw ConfigError::for_key("dynamic.feature_border_px", "must be in 0..50");
   }
+  if (segmentation_interval < 1 || segmentation_interval > 30) {
+    throw ConfigError::for_key("dynamic.segmentation_interval", "must be in 1..30");
+  }
+  if (segmentation_reuse_dilation_px < 0 || segmentation_reuse_dilation_px > 50) {
+    throw ConfigError::for_key("dynamic.segmentation_reuse_dilation_px", "must be in 0..50");
+  }
   if (keyframe_depth_cache < 1) {
     throw ConfigError::for_key("dynamic.keyframe_depth_cache", "must be >= 1");
   }
@@ -39,12 +45,25 @@ std::string DynamicFrontEnd::segmenter_description() const {
   return segmenter_ ? segmenter_->description() : "none";
 }
 
-cv::Mat DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame, double* elapsed_ms) {
-  if (!segmenter_) return {};
-  Stopwatch watch;
-  cv::Mat mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
-  if (elapsed_ms != nullptr) *elapsed_ms = watch.elapsed_ms();
-  return mask;
+CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
+  CnnMask out;
+  if (!segmenter_) return out;
+  const Stopwatch watch;
+  // The schedule depends only on the frame indices, so it is the same on every run.
+  const bool reuse =
+      last_cnn_index_ && frame.index > *last_cnn_index_ &&
+      frame.index - *last_cnn_index_ < static_cast<std::size_t>(config_.segmentation_interval);
+  if (reuse) {
+    out.mask =
+        dynamics::feature_exclusion_mask(last_cnn_mask_, config_.segmentation_reuse_dilation_px);
+    out.reused = true;
+  } else {
+    out.mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+    last_cnn_mask_ = out.mask;
+    last_cnn_index_ = frame.index;
+  }
+  out.elapsed_ms = watch.elapsed_ms();
+  return out;
 }
 
 cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
@@ -73,9 +92,14 @@ cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_
                                          stats);
 }
 
-void DynamicFrontEnd::finish_masks(DynamicMasks& masks) const {
+cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {
+  return dynamics::feature_exclusion_mask(mask, config_.feature_border_px);
+}
+
+void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
+                                   const cv::Mat& geometry_exclusion) const {
   masks.combined = dynamics::combine_masks(masks.cnn, masks.geometry);
-  masks.exclusion = dynamics::feature_exclusion_mask(masks.combined, config_.feature_border_px);
+  masks.exclusion = dynamics::combine_masks(cnn_exclusion, geometry_exclusion);
 }
 
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m) {

@@ -3,14 +3,15 @@
 // a-priori dynamic classes, the multi-view geometry mask against reference keyframes at a
 // low-cost pose, their union, and the exclusion mask handed to ORB extraction (the union grown by
 // a border, so features on object edges are not used either).
-// Thread-safety: one instance per pipeline; cnn_mask() may run on a segmentation thread while the
-// other methods run on the tracking thread (they share no state but the keyframe depth cache,
-// which is locked).
+// Thread-safety: one instance per pipeline; cnn_mask() may run on a segmentation thread
+// (SegmentationStage) while the other methods run on the tracking thread (they share no state but
+// the keyframe depth cache, which is locked); cnn_mask() itself from one thread at a time.
 
 #include <map>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
@@ -23,11 +24,19 @@
 
 namespace ddl::pipeline {
 
+/// The CNN mask of one frame, computed inline or ahead of tracking (SegmentationStage).
+struct CnnMask {
+  cv::Mat mask;             // CV_8UC1 255 = dynamic class (empty when segmentation is off)
+  double elapsed_ms = 0.0;  // inference and post-processing
+  bool reused = false;      // the last CNN mask grown (dynamic.segmentation_interval), no inference
+};
+
 struct DynamicMasks {
   cv::Mat cnn;        // CV_8UC1 255 = dynamic class (empty when segmentation is off)
   cv::Mat geometry;   // CV_8UC1 255 = moved according to the geometry check (may be empty)
   cv::Mat combined;   // union (empty when both are)
   cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
+                      // (CNN part before ORB extraction, geometry part after the low-cost pose)
   dynamics::GeometryCheckStats geometry_stats;
   double segmentation_ms = 0.0;
   double geometry_ms = 0.0;
@@ -44,16 +53,22 @@ class DynamicFrontEnd {
   bool has_segmenter() const { return segmenter_ != nullptr; }
   std::string segmenter_description() const;
 
-  /// CNN mask of one frame (empty when segmentation is off).
-  cv::Mat cnn_mask(const io::RgbdFrame& frame, double* elapsed_ms = nullptr);
+  /// CNN mask of one frame (empty when segmentation is off); frames in index order. With
+  /// dynamic.segmentation_interval > 1 most frames reuse the last inferred mask, grown.
+  CnnMask cnn_mask(const io::RgbdFrame& frame);
 
   /// Geometry mask at pose T_c_w against `references` (best overlap first).
   cv::Mat geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                         const std::vector<map::KeyFramePtr>& references,
                         dynamics::GeometryCheckStats* stats);
 
-  /// Union and exclusion mask.
-  void finish_masks(DynamicMasks& masks) const;
+  /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
+  cv::Mat exclusion_mask(const cv::Mat& mask) const;
+
+  /// The union of the CNN and geometry masks, and the exclusion mask as the union of their
+  /// exclusion masks (dilation distributes over union, so this is the union grown by the border).
+  void finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
+                    const cv::Mat& geometry_exclusion) const;
 
   /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
   void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m);
@@ -62,6 +77,8 @@ class DynamicFrontEnd {
   DynamicConfig config_;
   camera::PinholeCamera camera_;
   std::unique_ptr<segmentation::Segmenter> segmenter_;
+  cv::Mat last_cnn_mask_;  // cnn_mask()'s thread only
+  std::optional<std::size_t> last_cnn_index_;
   std::mutex cache_mutex_;
   std::map<map::KeyFrameId, cv::Mat> depth_cache_;
 };

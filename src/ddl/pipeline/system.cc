@@ -79,42 +79,72 @@ System::~System() {
   }
 }
 
-std::optional<SE3> System::low_cost_pose() const {
+std::optional<SE3> System::constant_velocity_pose() const {
   if (!last_T_c_w_) return std::nullopt;
   if (!velocity_) return last_T_c_w_;
   return *velocity_ * *last_T_c_w_;
 }
 
-DynamicMasks System::dynamic_masks(const io::RgbdFrame& frame) {
-  DynamicMasks masks;
-  if (!dynamic_->enabled()) return masks;
-  masks.cnn = dynamic_->cnn_mask(frame, &masks.segmentation_ms);
-  if (dynamic_->has_segmenter()) timings_.record("segmentation", masks.segmentation_ms);
-  // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
-  // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
-  const std::optional<SE3> T_c_w = low_cost_pose();
-  if (T_c_w && last_reference_ && !last_reference_->is_bad()) {
-    Stopwatch watch;
-    std::vector<map::KeyFramePtr> references{last_reference_};
-    for (auto& kf : last_reference_->best_covisibles(
-             static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
-      references.push_back(std::move(kf));
-    }
-    masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats);
-    masks.geometry_ms = watch.elapsed_ms();
-    timings_.record("geometry_check", masks.geometry_ms);
-  }
-  dynamic_->finish_masks(masks);
-  return masks;
+CnnMask System::segment(const io::RgbdFrame& frame) {
+  if (!dynamic_->enabled()) return {};
+  return dynamic_->cnn_mask(frame);
 }
 
-FrameOutcome System::process(const io::RgbdFrame& frame) {
+cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
+                                       DynamicMasks& masks) {
+  if (!config_.dynamic.use_geometry || !last_reference_ || last_reference_->is_bad()) return {};
+  const Stopwatch watch;
+  std::optional<SE3> T_c_w = tracker_->low_cost_pose(current);
+  timings_.record("low_cost_tracking", watch.elapsed_ms());
+  if (T_c_w) {
+    ++stats_.geometry_checks_low_cost;
+  } else {
+    T_c_w = constant_velocity_pose();
+    if (!T_c_w) return {};
+    ++stats_.geometry_checks_predicted;
+  }
+  // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
+  // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
+  const Stopwatch geometry_watch;
+  std::vector<map::KeyFramePtr> references{last_reference_};
+  for (auto& kf : last_reference_->best_covisibles(
+           static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
+    references.push_back(std::move(kf));
+  }
+  masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats);
+  cv::Mat exclusion = dynamic_->exclusion_mask(masks.geometry);
+  masks.geometry_ms = geometry_watch.elapsed_ms();
+  timings_.record("geometry_check", masks.geometry_ms);
+  const Stopwatch drop_watch;
+  tracker_->exclude_features(current, exclusion);
+  timings_.record("geometry_feature_removal", drop_watch.elapsed_ms());
+  return exclusion;
+}
+
+FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn) {
   if (finished_) throw Error("System::process called after finish()");
   rethrow_worker_error();
   Stopwatch frame_watch;
 
   FrameOutcome outcome;
-  outcome.masks = dynamic_masks(frame);
+  DynamicMasks& masks = outcome.masks;
+  cv::Mat cnn_exclusion;
+  if (dynamic_->enabled()) {
+    if (!cnn) cnn = dynamic_->cnn_mask(frame);
+    masks.cnn = std::move(cnn->mask);
+    masks.segmentation_ms = cnn->elapsed_ms;
+    if (dynamic_->has_segmenter()) {
+      timings_.record(cnn->reused ? "segmentation.reused_mask" : "segmentation",
+                      masks.segmentation_ms);
+    }
+    cnn_exclusion = dynamic_->exclusion_mask(masks.cnn);
+  }
+  // ORB features once per frame, outside the CNN mask; the geometry check drops more of them.
+  tracking::Frame current = tracker_->prepare_frame(frame, cnn_exclusion);
+  if (dynamic_->enabled()) {
+    const cv::Mat geometry_exclusion = remove_moving_features(frame, current, masks);
+    dynamic_->finish_masks(masks, cnn_exclusion, geometry_exclusion);
+  }
 
   tracking::MappingStatus status;
   if (config_.mode == RunMode::kThreaded) {
@@ -125,7 +155,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame) {
   }
   ++frames_since_keyframe_;
   tracking::TrackingResult& result = outcome.tracking;
-  result = tracker_->track(frame, outcome.masks.exclusion, status);
+  result = tracker_->track(std::move(current), status);
   timings_.record("tracking", result.timings.total_ms);
   timings_.record("tracking.features", result.timings.features_ms);
   timings_.record("tracking.initial_pose", result.timings.initial_pose_ms);
@@ -147,8 +177,13 @@ FrameOutcome System::process(const io::RgbdFrame& frame) {
   if (result.state == tracking::TrackingState::kRelocalized) ++stats_.relocalizations;
   if (result.map_reset) {
     ++stats_.map_resets;
-    // The map was cleared: nothing downstream may keep using the old keyframes.
+    // The map was cleared: nothing downstream may keep using the old keyframes. Local mapping
+    // and loop closing forget their lists and drop keyframes made for the old map (still queued
+    // in threaded mode): every keyframe created from now on has an id above the one reserved here.
     last_reference_.reset();
+    const map::KeyFrameId first_valid_keyframe = map_->next_keyframe_id();
+    mapper_->request_reset(first_valid_keyframe);
+    loop_closer_->request_reset(first_valid_keyframe);
   }
 
   if (config_.save_masks && !config_.output_dir.empty() && !outcome.masks.combined.empty()) {

@@ -14,7 +14,15 @@
 // A worker that throws stores the exception; the next process()/finish() call rethrows it after
 // shutting the other stages down, and the trajectory so far stays available.
 //
-// Thread-safety: process(), finish() and the accessors must be called from one thread.
+// Per frame (DDL-SLAM Algorithm 1): the CNN mask (given, when a SegmentationStage computed it
+// ahead, or computed inline); ORB features once, outside the CNN mask and its border; the
+// low-cost pose from them (Tracker::low_cost_pose: last-frame matching and motion-only BA, no
+// local map; the constant-velocity prediction when that fails); the multi-view geometry check at
+// that pose; the features inside the geometry mask and its border dropped; then the rest of
+// tracking with the same features.
+//
+// Thread-safety: process(), finish() and the accessors must be called from one thread; segment()
+// may run on one other thread (a SegmentationStage) meanwhile.
 
 #include <atomic>
 #include <condition_variable>
@@ -52,6 +60,8 @@ struct SystemStatistics {
   std::size_t map_points = 0;  // alive in the map at the end
   std::size_t loops_closed = 0;
   std::size_t map_resets = 0;
+  std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose
+  std::size_t geometry_checks_predicted = 0;  // ... at the constant-velocity prediction (fallback)
   DenseStats dense;
 };
 
@@ -69,10 +79,15 @@ class System {
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
-  /// Tracks one frame (frames in timestamp order). `dynamic_mask` (CV_8UC1, non-zero = pixel to
-  /// ignore) may be empty.
-  /// Runs the dynamic front end (unless disabled), tracking, and hands new keyframes on.
-  FrameOutcome process(const io::RgbdFrame& frame);
+  /// Tracks one frame (frames in timestamp order): runs the dynamic front end (unless disabled)
+  /// and tracking, and hands new keyframes on. `cnn`: the frame's CNN mask from segment() when it
+  /// was computed ahead (SegmentationStage); std::nullopt = segment inline.
+  FrameOutcome process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn = std::nullopt);
+
+  /// The CNN mask of one frame (empty when dynamic removal or segmentation is off). It depends
+  /// only on the frame. May run on one other thread while process() runs, provided process() is
+  /// then always given the masks (the network serves one thread at a time).
+  CnnMask segment(const io::RgbdFrame& frame);
 
   /// Ends the run: drains the queues, joins the workers, waits for a running global BA.
   /// Rethrows a worker's exception. Idempotent.
@@ -91,8 +106,11 @@ class System {
   void mapping_worker();
   void loop_worker();
   void handle_keyframe_inline(const map::KeyFramePtr& keyframe);
-  DynamicMasks dynamic_masks(const io::RgbdFrame& frame);
-  std::optional<SE3> low_cost_pose() const;
+  /// Geometry check at the low-cost pose of `current` (filling masks.geometry) and removal of
+  /// the features in its exclusion mask, which it returns (empty when the check did not run).
+  cv::Mat remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
+                                 DynamicMasks& masks);
+  std::optional<SE3> constant_velocity_pose() const;
   void rethrow_worker_error();
   void store_error(std::exception_ptr error);
   void shutdown_workers(bool wait_for_global_ba);
@@ -107,7 +125,8 @@ class System {
   std::unique_ptr<loop::LoopCloser> loop_closer_;
   std::unique_ptr<DynamicFrontEnd> dynamic_;
   std::unique_ptr<DenseMapper> dense_;
-  // Low-cost pose: constant-velocity prediction from the last two tracked frames.
+  // Fallback pose of the geometry check: constant-velocity prediction from the last two tracked
+  // frames.
   std::optional<SE3> last_T_c_w_;
   std::optional<SE3> velocity_;  // T_c(k) c(k-1)
   map::KeyFramePtr last_reference_;

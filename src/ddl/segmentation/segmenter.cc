@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -90,6 +91,10 @@ class OnnxSegmenter final : public Segmenter {
     if (net_.empty()) throw InputError::at(model_path_, "not a loadable ONNX model (empty net)");
     net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
     net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+    // OpenCV dnn parallelises layers with cv::parallel_for_, whose thread count is process-wide:
+    // this also sets it for every other OpenCV call of the process. The default 1 suits the
+    // pipeline, which runs segmentation and tracking on threads of their own (docs/dynamics.md).
+    cv::setNumThreads(config_.num_threads);
     for (const auto& name : config_.dynamic_classes) {
       const auto it = std::find(config_.class_names.begin(), config_.class_names.end(), name);
       dynamic_labels_.insert(static_cast<int>(it - config_.class_names.begin()));

@@ -75,6 +75,46 @@ Vec3d Frame::unproject_w(std::size_t i) const {
   return T_c_w_.inverse() * p_c;
 }
 
+std::size_t Frame::drop_features_in(const cv::Mat& mask) {
+  if (mask.empty() || !features_) return 0;
+  if (mask.type() != CV_8UC1 || mask.cols != geometry_->width || mask.rows != geometry_->height) {
+    throw Error(fmt::format("Frame::drop_features_in: the mask must be CV_8UC1 of size {}x{}",
+                            geometry_->width, geometry_->height));
+  }
+  map::FrameFeatures& f = *features_;
+  std::vector<std::size_t> keep;
+  keep.reserve(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const cv::Point2f& pt = f.keypoints[i].pt;
+    const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, mask.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, mask.rows - 1);
+    if (mask.at<std::uint8_t>(y, x) == 0) keep.push_back(i);
+  }
+  const std::size_t removed = f.size() - keep.size();
+  if (removed == 0) return 0;
+
+  cv::Mat descriptors(static_cast<int>(keep.size()), f.descriptors.cols, f.descriptors.type());
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    const std::size_t i = keep[k];
+    f.keypoints[k] = f.keypoints[i];
+    f.depth_m[k] = f.depth_m[i];
+    f.u_right[k] = f.u_right[i];
+    f.descriptors.row(static_cast<int>(i)).copyTo(descriptors.row(static_cast<int>(k)));
+    map_points_[k] = std::move(map_points_[i]);
+    outliers_[k] = outliers_[i];
+  }
+  f.keypoints.resize(keep.size());
+  f.depth_m.resize(keep.size());
+  f.u_right.resize(keep.size());
+  f.descriptors = descriptors;
+  map_points_.resize(keep.size());
+  outliers_.resize(keep.size());
+  f.grid = features::FeatureGrid(f.keypoints, f.grid.bounds(), f.grid.cols(), f.grid.rows());
+  f.bow = {};
+  f.feature_vector = {};
+  return removed;
+}
+
 void Frame::compute_bow(const vocabulary::Vocabulary& vocabulary, int levels_up) {
   if (features_->has_bow() || vocabulary.empty()) return;
   vocabulary.transform(features_->descriptors, levels_up, features_->bow,

@@ -103,6 +103,15 @@ class Frame {
   /// World point of keypoint i from its depth (precondition: has_depth(i) and has_pose()).
   Vec3d unproject_w(std::size_t i) const;
 
+  // --- dynamic content -------------------------------------------------------------------------
+  /// Removes the keypoints at non-zero pixels of `mask` (CV_8UC1 of the image size; empty = no-op)
+  /// with their descriptors, depth, map point slots and outlier flags, rebuilds the grid and drops
+  /// a computed BoW vector (its feature indices would be stale). DDL-SLAM Algorithm 1: features
+  /// the multi-view geometry check found on moving content are not used after the low-cost pose.
+  /// Must not be called after the features were shared with a keyframe. Returns how many were
+  /// removed.
+  std::size_t drop_features_in(const cv::Mat& mask);
+
   // --- bag of words ----------------------------------------------------------------------------
   bool has_bow() const { return features_->has_bow(); }
   /// Computes the BoW vector and direct index once (no-op when present). Must not be called after

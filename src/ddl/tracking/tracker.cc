@@ -67,22 +67,74 @@ Tracker::Tracker(const TrackerConfig& config, const camera::PinholeCamera& camer
       relocalizer_(config_.relocalization, config_.frame.bow_levels_up, map_, vocabulary_,
                    database_) {}
 
+Frame Tracker::prepare_frame(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask) {
+  const Stopwatch watch;
+  Frame prepared = builder_.build(frame, dynamic_mask, next_frame_id_++);
+  prepared_ = PreparedFrame{};
+  prepared_.frame_id = prepared.id();
+  prepared_.frame_index = frame.index;
+  prepared_.features_ms = watch.elapsed_ms();
+  return prepared;
+}
+
+std::optional<SE3> Tracker::low_cost_pose(Frame& frame) {
+  if (frame.id() != prepared_.frame_id || prepared_.initial_pose_done) {
+    throw Error("Tracker::low_cost_pose: call it once, on the frame prepare_frame() returned last");
+  }
+  const TrackingState state = state_.load();
+  if (state == TrackingState::kNotInitialized || state == TrackingState::kLost) return std::nullopt;
+  const Stopwatch watch;
+  map_->read_consistent(
+      [&] { prepared_.initial_pose_ok = estimate_initial_pose(frame, prepared_.method); });
+  prepared_.initial_pose_done = true;
+  prepared_.initial_pose_ms = watch.elapsed_ms();
+  if (!prepared_.initial_pose_ok) return std::nullopt;
+  return frame.T_c_w();
+}
+
+std::size_t Tracker::exclude_features(Frame& frame, const cv::Mat& mask) {
+  const Stopwatch watch;
+  const int matched_before = frame.matched_count();
+  const std::size_t dropped = frame.drop_features_in(mask);
+  if (prepared_.initial_pose_ok && frame.id() == prepared_.frame_id &&
+      frame.matched_count() < matched_before) {
+    // The low-cost pose saw the dropped matches: estimate it again from the static ones.
+    map_->read_consistent([&] {
+      estimator_.optimize(frame);
+      prepared_.initial_pose_ok = discard_outliers(frame) >= config_.matching.min_map_matches;
+    });
+    if (!prepared_.initial_pose_ok) {
+      // Too little left: track() estimates the initial pose again with all its fallbacks.
+      frame.clear_map_points();
+      prepared_.initial_pose_done = false;
+    }
+  }
+  prepared_.initial_pose_ms += watch.elapsed_ms();
+  return dropped;
+}
+
+TrackingResult Tracker::track(Frame frame, const MappingStatus& mapping) {
+  const Stopwatch total;
+  if (frame.id() != prepared_.frame_id || !frame.valid()) {
+    throw Error("Tracker::track: the frame must be the one prepare_frame() returned last");
+  }
+  TrackingResult result;
+  result.frame_index = prepared_.frame_index;
+  result.timestamp_s = frame.timestamp_s();
+  result.timings.features_ms = prepared_.features_ms;
+  result.num_features = frame.size();
+
+  map_->read_consistent([&] { track_locked(frame, mapping, result); });
+  last_frame_ = std::move(frame);
+  // The whole tracking work of the frame, also what prepare_frame() and low_cost_pose() did.
+  result.timings.total_ms = total.elapsed_ms() + prepared_.features_ms +
+                            (prepared_.initial_pose_done ? prepared_.initial_pose_ms : 0.0);
+  return result;
+}
+
 TrackingResult Tracker::track(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask,
                               const MappingStatus& mapping) {
-  const Stopwatch total;
-  TrackingResult result;
-  result.frame_index = frame.index;
-  result.timestamp_s = frame.timestamp_s;
-
-  const Stopwatch features_watch;
-  Frame current = builder_.build(frame, dynamic_mask, next_frame_id_++);
-  result.timings.features_ms = features_watch.elapsed_ms();
-  result.num_features = current.size();
-
-  map_->read_consistent([&] { track_locked(current, mapping, result); });
-  last_frame_ = std::move(current);
-  result.timings.total_ms = total.elapsed_ms();
-  return result;
+  return track(prepare_frame(frame, dynamic_mask), mapping);
 }
 
 void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingResult& result) {
@@ -110,24 +162,20 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
 
   bool ok = false;
   const bool was_lost = state_.load() == TrackingState::kLost;
-  if (!was_lost) {
-    refresh_last_frame();
-    if (!motion_model_.valid() || frame.id() < last_relocalization_frame_id_ + 2) {
-      result.method = TrackingMethod::kReferenceKeyFrame;
-      ok = track_reference_keyframe(frame);
-    } else {
-      result.method = TrackingMethod::kMotionModel;
-      ok = track_motion_model(frame);
-      if (!ok) {
-        result.method = TrackingMethod::kReferenceKeyFrame;
-        ok = track_reference_keyframe(frame);
-      }
-    }
+  if (prepared_.initial_pose_done) {
+    // low_cost_pose() ran this step already (only while tracking was ok).
+    ok = prepared_.initial_pose_ok;
+    result.method = prepared_.method;
+    result.timings.initial_pose_ms = prepared_.initial_pose_ms;
   } else {
-    result.method = TrackingMethod::kRelocalization;
-    ok = relocalize(frame);
+    if (!was_lost) {
+      ok = estimate_initial_pose(frame, result.method);
+    } else {
+      result.method = TrackingMethod::kRelocalization;
+      ok = relocalize(frame);
+    }
+    result.timings.initial_pose_ms = stage.elapsed_ms();
   }
-  result.timings.initial_pose_ms = stage.elapsed_ms();
 
   frame.set_reference_keyframe(reference_keyframe_);
   if (ok) {
@@ -183,6 +231,16 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
   trajectory_.add_tracked(frame.timestamp_s(), frame.T_c_w(), frame.reference_keyframe());
   last_T_c_r_ = frame.T_c_w() * frame.reference_keyframe()->T_w_c();
   last_frame_tracked_ = true;
+}
+
+bool Tracker::estimate_initial_pose(Frame& frame, TrackingMethod& method) {
+  refresh_last_frame();
+  if (motion_model_.valid() && frame.id() >= last_relocalization_frame_id_ + 2) {
+    method = TrackingMethod::kMotionModel;
+    if (track_motion_model(frame)) return true;
+  }
+  method = TrackingMethod::kReferenceKeyFrame;
+  return track_reference_keyframe(frame);
 }
 
 bool Tracker::initialize(Frame& frame, TrackingResult& result) {

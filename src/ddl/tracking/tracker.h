@@ -9,7 +9,19 @@
 // pose_estimation (motion-only BA), keyframe_decision, keyframe_creation, relocalizer,
 // trajectory_recorder. The Tracker only sequences them and keeps the state between frames.
 //
-// Threads: track() is called for every frame, in order, from one thread (the tracking thread).
+// Per frame, DDL-SLAM Algorithm 1 needs a pose before tracking is complete (the multi-view
+// geometry check runs at it), so tracking is split into steps called in this order:
+//   1. prepare_frame(): ORB features once, outside the CNN exclusion mask;
+//   2. low_cost_pose() (optional): the initial-pose step of tracking alone (motion model against
+//      the last frame, else BoW matching against the reference keyframe, each with motion-only
+//      BA; no local map);
+//   3. exclude_features() (optional): features on content found moving are dropped and the
+//      low-cost pose is refined without them;
+//   4. track(): the rest of tracking with the same Frame (initial pose unless step 2 did it,
+//      local map, keyframe decision).
+// track(io::RgbdFrame, mask, ...) does steps 1 and 4 in one call.
+//
+// Threads: the steps are called for every frame, in order, from one thread (the tracking thread).
 // camera_trajectory(), state() and frames_tracked() may be called from any thread (but not from
 // inside Map::read_consistent / apply_update: camera_trajectory() takes the map's update lock);
 // last_frame() and local_map() from the tracking thread only. While tracking a frame the Tracker
@@ -19,6 +31,7 @@
 #include <atomic>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/io/rgbd_frame.h"
@@ -48,8 +61,27 @@ class Tracker {
           std::shared_ptr<map::Map> map, std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
           std::shared_ptr<vocabulary::BowDatabase> keyframe_database);
 
-  /// Tracks one frame. `dynamic_mask` (CV_8U, non-zero = ignore) may be empty. Throws
-  /// ddl::InputError only for images of the wrong type or size; tracking failure is a state.
+  /// Step 1: the tracking frame of `frame` with ORB features outside `dynamic_mask` (CV_8U,
+  /// non-zero = ignore; may be empty). Throws ddl::InputError for images of the wrong type or
+  /// size.
+  Frame prepare_frame(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask);
+
+  /// Step 2: the low-cost pose T_c_w of a prepared frame. The matches it makes stay in `frame`
+  /// and track() continues from them (nothing is computed twice). std::nullopt before the map
+  /// exists, while lost (relocalization is not low-cost) or when the pose cannot be estimated;
+  /// track() then does the work itself.
+  std::optional<SE3> low_cost_pose(Frame& frame);
+
+  /// Step 3: drops the features of `frame` at non-zero pixels of `mask` (CV_8UC1; empty = none);
+  /// when some of them carried matches of the low-cost pose, that pose is re-estimated from the
+  /// remaining matches. Returns the number of features dropped.
+  std::size_t exclude_features(Frame& frame, const cv::Mat& mask);
+
+  /// Step 4: tracks the prepared frame (consumed: it becomes last_frame()). Tracking failure is
+  /// a state, not an exception.
+  TrackingResult track(Frame frame, const MappingStatus& mapping);
+
+  /// Steps 1 and 4: tracks one frame with features outside `dynamic_mask`.
   TrackingResult track(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask,
                        const MappingStatus& mapping);
 
@@ -66,7 +98,20 @@ class Tracker {
   std::size_t frames_tracked() const { return trajectory_.tracked_frames(); }
 
  private:
+  /// What steps 1-3 found out about the frame being prepared (valid for frame_id only).
+  struct PreparedFrame {
+    FrameId frame_id = 0;
+    std::size_t frame_index = 0;  // io::RgbdFrame::index
+    double features_ms = 0.0;
+    bool initial_pose_done = false;  // low_cost_pose() ran the initial-pose step
+    bool initial_pose_ok = false;
+    TrackingMethod method = TrackingMethod::kNone;
+    double initial_pose_ms = 0.0;
+  };
+
   void track_locked(Frame& frame, const MappingStatus& mapping, TrackingResult& result);
+  /// Initial pose of a frame while tracking is ok: motion model, else reference keyframe.
+  bool estimate_initial_pose(Frame& frame, TrackingMethod& method);
   bool initialize(Frame& frame, TrackingResult& result);
   bool track_reference_keyframe(Frame& frame);
   bool track_motion_model(Frame& frame);
@@ -93,6 +138,7 @@ class Tracker {
 
   std::atomic<TrackingState> state_{TrackingState::kNotInitialized};
   FrameId next_frame_id_ = 0;
+  PreparedFrame prepared_;
   Frame last_frame_;
   SE3 last_T_c_r_;  // last frame relative to its reference keyframe
   bool last_frame_tracked_ = false;
