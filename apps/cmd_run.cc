@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -17,45 +18,36 @@
 #include "ddl/config/system_config.h"
 #include "ddl/core/error.h"
 #include "ddl/io/dataset_factory.h"
+#include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/pipeline/sequence_runner.h"
 #include "ddl/pipeline/system.h"
 #include "ddl/vocabulary/vocabulary.h"
+#include "run_command.h"
 
 namespace ddl::app {
 namespace {
 namespace fs = std::filesystem;
 
-struct RunArgs {
-  std::string sequence;
-  std::string camera;
-  std::string config_path;
-  std::string output_dir = "out/run";
-  std::string vocabulary_path;
-  std::string dataset_kind = "auto";
-  std::string associations = "auto";
-  std::string mode;
-  std::string shared_dir;
-  std::size_t max_frames = 0;
-  std::size_t first_frame = 0;
-  bool no_eval = false;
-  bool no_dynamic = false;
-  bool no_loop = false;
-  bool no_octomap = false;
-  bool no_inpainting = false;
-  bool save_masks = false;
-  bool save_inpainted = false;
-  std::string segmentation;
-};
+}  // namespace
 
-/// The default vocabulary: $DDL_VOCABULARY, else the one shipped in the source tree.
 std::string resolve_vocabulary(const std::string& flag) {
   if (!flag.empty()) return flag;
   if (const char* env = std::getenv("DDL_VOCABULARY"); env != nullptr && *env != '\0') return env;
   return config::default_vocabulary_path();
 }
 
-int run(const RunArgs& args) {
-  const auto& stop = install_stop_handler();
+std::shared_ptr<const vocabulary::Vocabulary> load_vocabulary(const std::string& path) {
+  Stopwatch load_watch;
+  auto vocabulary =
+      std::make_shared<const vocabulary::Vocabulary>(vocabulary::Vocabulary::load(path));
+  spdlog::info("vocabulary {}: {} words, loaded in {:.0f} ms", path, vocabulary->word_count(),
+               load_watch.elapsed_ms());
+  return vocabulary;
+}
+
+RunResult run_sequence_command(const RunArgs& args,
+                               std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
+                               const std::atomic<bool>* stop) {
   const std::string shared_dir = resolve_shared_dir(args.shared_dir);
 
   pipeline::SystemConfig config = args.config_path.empty()
@@ -89,12 +81,7 @@ int run(const RunArgs& args) {
   spdlog::info("{}: {} frames, camera {}", dataset->name(), dataset->size(),
                dataset->camera().name);
 
-  const std::string vocabulary_path = resolve_vocabulary(args.vocabulary_path);
-  Stopwatch load_watch;
-  auto vocabulary =
-      std::make_shared<const vocabulary::Vocabulary>(vocabulary::Vocabulary::load(vocabulary_path));
-  spdlog::info("vocabulary {}: {} words, loaded in {:.0f} ms", vocabulary_path,
-               vocabulary->word_count(), load_watch.elapsed_ms());
+  if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
   fs::create_directories(args.output_dir);
   {
@@ -115,25 +102,52 @@ int run(const RunArgs& args) {
   run_options.first_frame = args.first_frame;
   run_options.max_frames = args.max_frames;
   run_options.evaluate = !args.no_eval;
+  // Ground-truth dynamic masks (sequences written by `ddl_slam synth`): mask quality metrics.
+  std::unique_ptr<pipeline::MaskEvaluator> mask_evaluator;
+  if (config.dynamic.enabled && !args.no_eval) {
+    mask_evaluator = pipeline::MaskEvaluator::open(args.sequence, *dataset_options.camera);
+  }
+  run_options.mask_evaluator = mask_evaluator.get();
   Progress progress("run " + dataset->name(),
                     std::min(dataset->size() - std::min(dataset->size(), args.first_frame),
                              args.max_frames == 0 ? dataset->size() : args.max_frames));
   const pipeline::RunOutcome outcome = pipeline::run_sequence(
-      *dataset, system, run_options, &stop,
+      *dataset, system, run_options, stop,
       [&](std::size_t done, std::size_t, const std::string& note) { progress.update(done, note); });
   progress.finish();
+  return {outcome.interrupted, outcome.summary};
+}
 
-  const auto& s = outcome.statistics;
+namespace {
+
+int run(const RunArgs& args) {
+  const auto& stop = install_stop_handler();
+  const RunResult outcome = run_sequence_command(args, nullptr, &stop);
+  const nlohmann::json& s = outcome.summary["statistics"];
+
   std::printf(
       "frames %zu, tracked %zu, lost %zu, keyframes %zu, map points %zu, loops %zu, "
       "relocalizations %zu\n",
-      s.frames, s.frames_tracked, s.frames_lost, s.keyframes, s.map_points, s.loops_closed,
-      s.relocalizations);
+      s["frames"].get<std::size_t>(), s["frames_tracked"].get<std::size_t>(),
+      s["frames_lost"].get<std::size_t>(), s["keyframes"].get<std::size_t>(),
+      s["map_points"].get<std::size_t>(), s["loops_closed"].get<std::size_t>(),
+      s["relocalizations"].get<std::size_t>());
   if (outcome.summary.contains("evaluation")) {
     const auto& ev = outcome.summary["evaluation"];
     std::printf("ATE RMSE %.4f m, RPE %.4f m/s %.3f deg/s, tracked ratio %.3f\n",
                 ev["ate"]["rmse_m"].get<double>(), ev["rpe"]["trans_rmse_m_per_s"].get<double>(),
                 ev["rpe"]["rot_rmse_deg_per_s"].get<double>(), ev["tracked_ratio"].get<double>());
+  }
+  if (outcome.summary.contains("masks")) {
+    const auto& m = outcome.summary["masks"];
+    auto value = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
+    std::printf(
+        "dynamic masks (IoU / precision / recall): cnn %.3f/%.3f/%.3f, geometry "
+        "%.3f/%.3f/%.3f, combined %.3f/%.3f/%.3f\n",
+        value(m["cnn"]["mean_iou"]), value(m["cnn"]["precision"]), value(m["cnn"]["recall"]),
+        value(m["geometry"]["mean_iou"]), value(m["geometry"]["precision"]),
+        value(m["geometry"]["recall"]), value(m["combined"]["mean_iou"]),
+        value(m["combined"]["precision"]), value(m["combined"]["recall"]));
   }
   std::printf("outputs in %s\n", args.output_dir.c_str());
   return outcome.interrupted ? kInterrupted : kOk;
@@ -148,7 +162,9 @@ void add_run_command(CLI::App& app, int& exit_code) {
       "Run DDL-SLAM on an RGB-D sequence in the TUM layout (TUM RGB-D, Bonn RGB-D Dynamic, or "
       "one written by `ddl_slam synth`). Writes CameraTrajectory.txt, KeyFrameTrajectory.txt "
       "(TUM format), summary.json, config.yaml, the octree map (map.ot/map.bt/map.ply + PNG "
-      "renderings) and, when the sequence has groundtruth.txt, eval/ with ATE/RPE and plots. "
+      "renderings) and, when the sequence has groundtruth.txt, eval/ with ATE/RPE and plots; "
+      "with ground-truth masks (dynamic_mask.txt, from `ddl_slam synth`) the mask quality goes "
+      "into summary.json. "
       "Ctrl-C stops cleanly and saves what was computed.");
   cmd->add_option("sequence", args->sequence, "Sequence folder (rgb.txt, depth.txt, ...)")
       ->required();

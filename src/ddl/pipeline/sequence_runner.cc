@@ -11,6 +11,7 @@
 #include "ddl/eval/plot.h"
 #include "ddl/eval/report.h"
 #include "ddl/pipeline/frame_prefetcher.h"
+#include "ddl/pipeline/segmentation_stage.h"
 
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
@@ -45,6 +46,8 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"map_points", s.map_points},
           {"loops_closed", s.loops_closed},
           {"map_resets", s.map_resets},
+          {"geometry_checks_low_cost", s.geometry_checks_low_cost},
+          {"geometry_checks_predicted", s.geometry_checks_predicted},
           {"dense",
            {{"keyframes", s.dense.keyframes},
             {"masked_pixels", s.dense.masked_pixels},
@@ -71,16 +74,29 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   std::exception_ptr error;
   Stopwatch wall;
   std::size_t done = 0;
+  TimingStats input_timings;  // how long tracking waits for the next frame and its mask
+  const double process_cpu_start_ms = process_cpu_ms();
+  const double caller_cpu_start_ms = thread_cpu_ms();
+  double caller_cpu_s = 0.0;  // this thread: tracking (deterministic mode: every stage inline)
+  MaskEvaluator* const masks = system.config().dynamic.enabled ? options.mask_evaluator : nullptr;
   try {
     FramePrefetcher prefetcher(dataset, begin, end);
+    // CNN masks computed ahead of tracking in their own thread, in both modes (they depend only
+    // on the frame). Destroyed before the prefetcher it reads from.
+    SegmentationStage segmentation([&] { return prefetcher.next(); },
+                                   [&](const io::RgbdFrame& f) { return system.segment(f); });
     while (true) {
       if (stop != nullptr && stop->load()) {
         outcome.interrupted = true;
         break;
       }
-      std::optional<io::RgbdFrame> frame = prefetcher.next();
-      if (!frame) break;
-      const FrameOutcome result = system.process(*frame);
+      const Stopwatch wait;
+      std::optional<SegmentedFrame> segmented = segmentation.next();
+      input_timings.record("input_wait", wait.elapsed_ms());
+      if (!segmented) break;
+      std::optional<io::RgbdFrame> frame = std::move(segmented->frame);
+      const FrameOutcome result = system.process(*frame, std::move(segmented->cnn));
+      if (masks != nullptr) masks->add(*frame, result.masks);
       ++done;
       if (progress) {
         progress(done, total,
@@ -88,6 +104,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
                              tracking::to_string(result.tracking.state)));
       }
     }
+    caller_cpu_s = (thread_cpu_ms() - caller_cpu_start_ms) / 1000.0;
     system.finish();
   } catch (...) {
     error = std::current_exception();
@@ -98,6 +115,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     }
   }
   const double wall_s = wall.elapsed_ms() / 1000.0;
+  const double process_cpu_s = (process_cpu_ms() - process_cpu_start_ms) / 1000.0;
 
   // Outputs first, so that nothing computed is lost, then the error (if any) propagates.
   const fs::path camera_path = out_dir / "CameraTrajectory.txt";
@@ -122,9 +140,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["failed"] = error != nullptr;
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
+  // CPU seconds, independent of other load on the machine (docs/dynamics.md, "Speed").
+  summary["cpu_s"] = {{"process", process_cpu_s}, {"caller_thread", caller_cpu_s}};
   summary["statistics"] = statistics_to_json(outcome.statistics);
   nlohmann::json timing = timings_to_json(system.timings());
   timing.update(timings_to_json(system.dense_mapper().timings()));
+  timing.update(timings_to_json(input_timings));
   summary["timing_ms"] = timing;
   summary["dynamic"] = {{"enabled", system.config().dynamic.enabled},
                         {"segmenter", system.dynamic_front_end().segmenter_description()},
@@ -132,6 +153,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   for (const std::string& f : map_files) {
     summary["outputs"]["map"].push_back(fs::path(f).filename().string());
   }
+  if (masks != nullptr) summary["masks"] = masks->to_json();
   summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
   summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
 

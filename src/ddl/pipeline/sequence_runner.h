@@ -2,7 +2,8 @@
 // Runs the System over a whole dataset and writes every output of a run into one folder:
 //   CameraTrajectory.txt    TUM format, T_w_c of every tracked frame
 //   KeyFrameTrajectory.txt  TUM format, T_w_c of every keyframe at the end of the run
-//   summary.json            counters, per-stage timing medians, evaluation (when ground truth)
+//   summary.json            counters, per-stage timing medians, evaluation (when ground truth),
+//                           mask quality (with RunOptions::mask_evaluator)
 //   config.yaml             the effective configuration (written by the caller, see apps)
 //   eval/                   ATE/RPE JSON and plots when the dataset has ground truth
 // Outputs are written also when the run stops early (Ctrl-C through `stop`, or an error in a
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "ddl/io/dataset_reader.h"
+#include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/pipeline/system.h"
 
 namespace ddl::pipeline {
@@ -24,6 +26,9 @@ struct RunOptions {
   std::size_t first_frame = 0;         // skip frames before this index
   std::size_t max_frames = 0;          // 0 = all frames
   bool evaluate = true;                // evaluate against ground truth when the dataset has it
+  /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
+  /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).
+  MaskEvaluator* mask_evaluator = nullptr;
 };
 
 struct RunOutcome {

@@ -1,0 +1,223 @@
+// `ddl_slam bench`: the paper's Tables 1-3 (ATE, RPE translational, RPE rotational) and mask
+// quality over a list of sequences, each run with dynamic removal and without (`--no-dynamic`,
+// the paper's ORB-SLAM2 column) through the same code path as `ddl_slam run`.
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "ddl/core/error.h"
+#include "ddl/eval/benchmark_tables.h"
+#include "run_command.h"
+
+namespace ddl::app {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct BenchArgs {
+  std::vector<std::string> sequences;
+  std::string suite;
+  std::string output_dir = "out/bench";
+  RunArgs run;  // settings shared by every run (sequence, output_dir and no_dynamic set per run)
+};
+
+struct Sequence {
+  std::string name;
+  std::string dir;
+};
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream file(path);
+  file << text;
+  if (!file) throw InputError::at(path.string(), "cannot write");
+}
+
+/// The sequences to run, validated before anything runs. Named folders must exist and hold
+/// rgb.txt and groundtruth.txt (an error otherwise); suite subfolders with rgb.txt but without
+/// groundtruth.txt are skipped with a warning, recorded in `skipped`.
+std::vector<Sequence> collect_sequences(const BenchArgs& args, json& skipped) {
+  std::vector<Sequence> out;
+  auto check = [](const fs::path& dir) {
+    if (!fs::is_directory(dir)) throw InputError::at(dir.string(), "sequence folder not found");
+    if (!fs::exists(dir / "rgb.txt")) {
+      throw InputError::at(dir.string(), "not a TUM-layout sequence (no rgb.txt)");
+    }
+    if (!fs::exists(dir / "groundtruth.txt")) {
+      throw InputError::at(dir.string(),
+                           "no groundtruth.txt: bench needs ground truth for its tables");
+    }
+  };
+  for (const std::string& s : args.sequences) {
+    const fs::path dir = fs::path(s).lexically_normal();
+    check(dir);
+    const fs::path name = dir.has_filename() ? dir.filename() : dir.parent_path().filename();
+    out.push_back({name.string(), dir.string()});
+  }
+  if (!args.suite.empty()) {
+    const fs::path suite(args.suite);
+    if (!fs::is_directory(suite)) throw InputError::at(args.suite, "suite folder not found");
+    std::vector<fs::path> dirs;
+    for (const auto& entry : fs::directory_iterator(suite)) {
+      if (entry.is_directory() && fs::exists(entry.path() / "rgb.txt")) dirs.push_back(entry);
+    }
+    std::sort(dirs.begin(), dirs.end());
+    for (const fs::path& dir : dirs) {
+      if (!fs::exists(dir / "groundtruth.txt")) {
+        spdlog::warn("bench: {} has no groundtruth.txt, skipped", dir.string());
+        skipped.push_back({{"sequence", dir.filename().string()},
+                           {"reason", "no groundtruth.txt in " + dir.string()}});
+        continue;
+      }
+      out.push_back({dir.filename().string(), dir.string()});
+    }
+    if (dirs.empty()) {
+      throw InputError::at(args.suite,
+                           "no sequence folders (subfolders with rgb.txt) in the suite");
+    }
+  }
+  if (out.empty()) throw InputError("bench: no sequence to run (give --sequences or --suite)");
+  std::set<std::string> names;
+  for (const Sequence& s : out) {
+    if (!names.insert(s.name).second) {
+      throw InputError::at(s.dir, "two sequences are named " + s.name +
+                                      "; their outputs would collide in the output folder");
+    }
+  }
+  return out;
+}
+
+json settings_json(const BenchArgs& args, std::size_t sequences) {
+  const RunArgs& r = args.run;
+  return {{"mode", r.mode},
+          {"max_frames", r.max_frames},
+          {"first_frame", r.first_frame},
+          {"config", r.config_path.empty() ? "defaults" : r.config_path},
+          {"camera", r.camera.empty() ? "per folder" : r.camera},
+          {"segmentation", r.segmentation.empty() ? "from the settings" : r.segmentation},
+          {"sequences", sequences}};
+}
+
+int bench(const BenchArgs& args) {
+  const auto& stop = install_stop_handler();
+  json skipped = json::array();
+  const std::vector<Sequence> sequences = collect_sequences(args, skipped);
+  const fs::path out_dir(args.output_dir);
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
+
+  const auto vocabulary = load_vocabulary(resolve_vocabulary(args.run.vocabulary_path));
+  const json settings = settings_json(args, sequences.size());
+  std::vector<eval::BenchmarkRow> rows;
+  auto write_tables = [&] {
+    const json tables = eval::benchmark_tables(rows, settings, skipped);
+    write_text(out_dir / "tables.json", tables.dump(2) + "\n");
+    write_text(out_dir / "tables.md", eval::benchmark_tables_markdown(tables));
+  };
+
+  bool interrupted = false;
+  bool failed = false;
+  for (std::size_t i = 0; i < sequences.size() && !interrupted; ++i) {
+    const Sequence& seq = sequences[i];
+    eval::BenchmarkRow row;
+    row.sequence = seq.name;
+    for (const bool dynamic : {true, false}) {
+      const char* column = dynamic ? "dynamic" : "no_dynamic";
+      std::fprintf(stderr, "bench [%zu/%zu] %s, %s\n", i + 1, sequences.size(), seq.name.c_str(),
+                   dynamic ? "with dynamic removal" : "without dynamic removal (--no-dynamic)");
+      RunArgs run = args.run;
+      run.sequence = seq.dir;
+      run.output_dir = (out_dir / seq.name / column).string();
+      run.no_dynamic = !dynamic;
+      try {
+        const RunResult result = run_sequence_command(run, vocabulary, &stop);
+        (dynamic ? row.ours : row.baseline) = result.summary;
+        if (result.interrupted) {
+          interrupted = true;
+          break;
+        }
+      } catch (const Error& e) {
+        spdlog::error("bench: {} ({}) failed: {}", seq.name, column, e.what());
+        skipped.push_back({{"sequence", seq.name},
+                           {"reason", fmt::format("{} run failed: {}", column, e.what())}});
+        failed = true;
+        break;
+      }
+    }
+    if (interrupted) {
+      skipped.push_back({{"sequence", seq.name}, {"reason", "interrupted (Ctrl-C)"}});
+    } else if (row.ours.is_object() && row.baseline.is_object()) {
+      rows.push_back(std::move(row));
+    }
+    write_tables();  // after every sequence, so finished results are never lost
+  }
+  std::fputs(
+      eval::benchmark_tables_markdown(eval::benchmark_tables(rows, settings, skipped)).c_str(),
+      stdout);
+  std::printf("\ntables in %s and %s\n", (out_dir / "tables.md").string().c_str(),
+              (out_dir / "tables.json").string().c_str());
+  if (interrupted) return kInterrupted;
+  return failed ? kFailure : kOk;
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<BenchArgs>();
+  args->run.mode = "deterministic";
+  CLI::App* cmd = app.add_subcommand(
+      "bench",
+      "The paper's Tables 1-3 over several sequences: each is run twice through the same code "
+      "path as `ddl_slam run`, with dynamic removal (DDL-SLAM) and with --no-dynamic (the paper's "
+      "ORB-SLAM2 column), sequentially. Writes <out>/<seq>/{dynamic,no_dynamic}/ (normal run "
+      "outputs) and <out>/tables.md + tables.json: ATE, RPE translational (m/s) and rotational "
+      "(deg/s) with RMSE, mean, median and S.D. of both columns and the improvement "
+      "(ORB-SLAM2 - DDL-SLAM) / ORB-SLAM2 x 100, mask IoU/precision/recall against "
+      "dynamic_mask/ when the sequence has it, and frames tracked. Every named sequence needs "
+      "groundtruth.txt (error otherwise); suite folders without it are skipped with a warning. "
+      "Ctrl-C stops after the current frame; the tables then hold the finished sequences.");
+  cmd->add_option("--sequences", args->sequences, "Sequence folders (TUM layout)");
+  cmd->add_option("--suite", args->suite,
+                  "A folder of sequences: every subfolder with rgb.txt, in name order");
+  cmd->add_option("--out", args->output_dir, "Output folder")->capture_default_str();
+  cmd->add_option("--mode", args->run.mode,
+                  "deterministic (reproducible) or threaded; overrides the settings file")
+      ->check(CLI::IsMember({"deterministic", "threaded"}))
+      ->capture_default_str();
+  cmd->add_option("--config", args->run.config_path,
+                  "System settings (YAML) for every run, as `ddl_slam run --config`");
+  cmd->add_option("--camera", args->run.camera,
+                  "Camera for every sequence (tum1, tum2, tum3, bonn, synthetic or a YAML file); "
+                  "default: per folder, as `ddl_slam run`");
+  cmd->add_option("--max-frames", args->run.max_frames,
+                  "Process at most this many frames of each sequence (0 = all)");
+  cmd->add_option("--first-frame", args->run.first_frame, "Skip the frames before this index");
+  cmd->add_option("--vocabulary", args->run.vocabulary_path,
+                  "ORB vocabulary file; default $DDL_VOCABULARY or the one shipped in vocab/");
+  cmd->add_option("--segmentation", args->run.segmentation,
+                  "Segmentation backend: onnx (default model in the shared folder), folder, none");
+  cmd->add_option("--shared-dir", args->run.shared_dir,
+                  "Shared data folder (models); default $DDL_SHARED_DIR or ../shared");
+  cmd->add_flag("--no-loop", args->run.no_loop, "Disable loop closing in every run");
+  cmd->add_flag("--no-octomap", args->run.no_octomap, "Do not build octree maps (faster)");
+  cmd->add_flag("--no-inpainting", args->run.no_inpainting, "Do not repair keyframes (faster)");
+  cmd->callback([args, &exit_code] {
+    if (args->sequences.empty() && args->suite.empty()) {
+      throw CLI::ValidationError("bench", "give --sequences and/or --suite");
+    }
+    exit_code = run_guarded([&] { return bench(*args); });
+  });
+}
+
+}  // namespace ddl::app

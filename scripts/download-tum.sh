@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Downloads the real TUM RGB-D sequences of the DDL-SLAM paper's Table 1 (freiburg3, dynamic
+# scenes) and prints the `ddl_slam bench` command that computes Tables 1-3 on them
+# (docs/evaluation.md, "Benchmark: ddl_slam bench"). Needs internet access and about 2.5 GB of
+# disk (archives are removed after extraction unless --keep-archives).
+#
+# Sequences (TUM RGB-D benchmark, Sturm et al., IROS 2012, CC BY 4.0):
+#   rgbd_dataset_freiburg3_walking_xyz, _walking_static, _walking_rpy, _walking_halfsphere,
+#   rgbd_dataset_freiburg3_sitting_static
+# from https://cvg.cit.tum.de/rgbd/dataset/freiburg3/<name>.tgz (the official download location;
+# the older host vision.in.tum.de serves the same paths and is tried when the first one fails).
+#
+# Usage: scripts/download-tum.sh [--out DIR] [--keep-archives] [--dry-run] [--ddl-slam PATH]
+#   --out DIR         where the sequence folders go (default data/tum)
+#   --keep-archives   keep the .tgz files next to the folders
+#   --dry-run         print the URLs and the bench command, download nothing
+#   --ddl-slam PATH   the binary shown in the bench command (default build/release/apps/ddl_slam)
+# A sequence whose folder already holds rgb.txt and groundtruth.txt is not downloaded again.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+out=data/tum
+keep=0
+dry_run=0
+ddl_slam=build/release/apps/ddl_slam
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) out="$2"; shift 2 ;;
+    --keep-archives) keep=1; shift ;;
+    --dry-run) dry_run=1; shift ;;
+    --ddl-slam) ddl_slam="$2"; shift 2 ;;
+    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+    *) echo "download-tum: unknown argument $1 (see --help)" >&2; exit 2 ;;
+  esac
+done
+
+sequences=(
+  rgbd_dataset_freiburg3_walking_xyz
+  rgbd_dataset_freiburg3_walking_static
+  rgbd_dataset_freiburg3_walking_rpy
+  rgbd_dataset_freiburg3_walking_halfsphere
+  rgbd_dataset_freiburg3_sitting_static
+)
+hosts=(https://cvg.cit.tum.de https://vision.in.tum.de)
+
+fetch() {  # fetch URL FILE
+  if command -v curl > /dev/null; then
+    curl --fail --location --retry 3 --continue-at - --output "$2" "$1"
+  elif command -v wget > /dev/null; then
+    wget --tries=3 --continue --output-document="$2" "$1"
+  else
+    echo "download-tum: neither curl nor wget is installed" >&2
+    exit 1
+  fi
+}
+
+mkdir -p "$out"
+for name in "${sequences[@]}"; do
+  dir="$out/$name"
+  if [ -f "$dir/rgb.txt" ] && [ -f "$dir/groundtruth.txt" ]; then
+    echo "$name: already in $dir"
+    continue
+  fi
+  archive="$out/$name.tgz"
+  if [ "$dry_run" = 1 ]; then
+    echo "$name: ${hosts[0]}/rgbd/dataset/freiburg3/$name.tgz -> $dir"
+    continue
+  fi
+  ok=0
+  for host in "${hosts[@]}"; do
+    url="$host/rgbd/dataset/freiburg3/$name.tgz"
+    echo "$name: downloading $url"
+    if fetch "$url" "$archive"; then
+      ok=1
+      break
+    fi
+    echo "download-tum: $url failed, trying the next host" >&2
+  done
+  if [ "$ok" = 0 ]; then
+    echo "download-tum: could not download $name (no internet access?)" >&2
+    exit 1
+  fi
+  tar -xzf "$archive" -C "$out"
+  if [ ! -f "$dir/rgb.txt" ] || [ ! -f "$dir/groundtruth.txt" ]; then
+    echo "download-tum: $archive did not unpack into $dir with rgb.txt and groundtruth.txt" >&2
+    exit 1
+  fi
+  [ "$keep" = 1 ] || rm -f "$archive"
+done
+
+cat <<MSG
+
+The paper's Table 1 sequences are in $out. Tables 1-3 (ATE, RPE translational and rotational,
+ORB-SLAM2 column = --no-dynamic, improvement in %):
+
+  $ddl_slam bench --suite $out --camera tum3 --out out/bench-tum
+
+or a selection:
+
+  $ddl_slam bench --camera tum3 --out out/bench-tum \\
+      --sequences $out/rgbd_dataset_freiburg3_walking_xyz $out/rgbd_dataset_freiburg3_sitting_static
+
+Results: out/bench-tum/tables.md and tables.json (docs/evaluation.md). The real sequences have no
+ground-truth masks, so the mask table stays empty.
+MSG

@@ -1,0 +1,230 @@
+// `ddl_slam bench` on two tiny generated sequences (walking people; seated people with a box that
+// starts moving early), the moved-box region against the renderer's per-pixel entity ids, and
+// bench's errors for bad input.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+
+#include "ddl/pipeline/mask_evaluator.h"
+#include "ddl/synthetic/sequence.h"
+
+namespace ddl {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string shared_dir() {
+  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
+  return DDL_DEFAULT_SHARED_DIR;
+}
+
+/// A preset at 320x240 (intrinsics halved) with `frames` frames.
+synthetic::SequenceConfig small_config(const std::string& preset, int frames) {
+  synthetic::SequenceConfig c = synthetic::find_preset(preset).config;
+  c.frames = frames;
+  c.camera.width = 320;
+  c.camera.height = 240;
+  c.camera.fx /= 2;
+  c.camera.fy /= 2;
+  c.camera.cx = (c.camera.cx + 0.5) / 2 - 0.5;
+  c.camera.cy = (c.camera.cy + 0.5) / 2 - 0.5;
+  c.people_dir = shared_dir() + "/data/people/ccp";
+  return c;
+}
+
+/// Runs a shell command; returns its exit status, stdout+stderr in `output`.
+int run_shell(const std::string& command, const fs::path& log, std::string* output = nullptr) {
+  const int status = std::system((command + " > '" + log.string() + "' 2>&1").c_str());
+  if (output != nullptr) {
+    std::ifstream file(log);
+    std::stringstream text;
+    text << file.rdbuf();
+    *output = text.str();
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+json read_json(const fs::path& path) {
+  std::ifstream file(path);
+  return json::parse(file);
+}
+
+class Bench : public ::testing::Test {
+ public:
+  static std::string command(const std::string& args) {
+    return std::string("'") + DDL_SLAM_BINARY + "' --log-level warn bench --shared-dir '" +
+           shared_dir() + "' " + args;
+  }
+
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new fs::path(fs::temp_directory_path() /
+                         ("ddl_bench_test_" + std::to_string(static_cast<long long>(getpid()))));
+    fs::remove_all(*root_);
+    synthetic::write_sequence(*synthetic::make_sequence_source(small_config("syn_walking_xyz", 40)),
+                              (*root_ / "walk").string());
+    sitting_ = new synthetic::SequenceConfig(small_config("syn_sitting_static", 40));
+    sitting_->object_move_start_s = 0.4;  // the box moves from frame 12 on, within the run
+    sitting_->object_move_duration_s = 0.5;
+    synthetic::write_sequence(*synthetic::make_sequence_source(*sitting_),
+                              (*root_ / "sit").string());
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(*root_, ec);
+    delete root_;
+    delete sitting_;
+  }
+  static fs::path* root_;
+  static synthetic::SequenceConfig* sitting_;
+};
+fs::path* Bench::root_ = nullptr;
+synthetic::SequenceConfig* Bench::sitting_ = nullptr;
+
+TEST_F(Bench, WritesBothColumnsAndTheImprovement) {
+  const fs::path out = *root_ / "out";
+  std::string log;
+  const int code = run_shell(
+      command("--sequences '" + (*root_ / "walk").string() + "' '" + (*root_ / "sit").string() +
+              "' --out '" + out.string() + "' --no-octomap --no-inpainting --segmentation none"),
+      *root_ / "bench.log", &log);
+  ASSERT_EQ(code, 0) << log;
+  for (const char* seq : {"walk", "sit"}) {
+    for (const char* column : {"dynamic", "no_dynamic"}) {
+      EXPECT_TRUE(fs::exists(out / seq / column / "CameraTrajectory.txt")) << seq << column;
+    }
+    // Mask metrics only where the dynamic removal ran.
+    const json ours = read_json(out / seq / "dynamic" / "summary.json");
+    const json baseline = read_json(out / seq / "no_dynamic" / "summary.json");
+    ASSERT_TRUE(ours.contains("masks")) << seq;
+    EXPECT_FALSE(baseline.contains("masks")) << seq;
+    EXPECT_EQ(ours["masks"]["combined"]["frames"], 40);
+    EXPECT_TRUE(ours["dynamic"]["enabled"].get<bool>());
+    EXPECT_FALSE(baseline["dynamic"]["enabled"].get<bool>());
+  }
+
+  const json tables = read_json(out / "tables.json");
+  ASSERT_EQ(tables["sequences"], json({"walk", "sit"}));
+  EXPECT_EQ(tables["settings"]["mode"], "deterministic");
+  int checked = 0;
+  for (const char* table : {"ate", "rpe_translation", "rpe_rotation"}) {
+    ASSERT_EQ(tables[table]["rows"].size(), 2u) << table;
+    for (const json& row : tables[table]["rows"]) {
+      for (const char* stat : {"rmse", "mean", "median", "std"}) {
+        const json& b = row["baseline"][stat];
+        const json& o = row["ours"][stat];
+        ASSERT_TRUE(b.is_number() && o.is_number()) << table << " " << row.dump();
+        const double expected = (b.get<double>() - o.get<double>()) / b.get<double>() * 100.0;
+        EXPECT_NEAR(row["improvement_pct"][stat].get<double>(), expected, 1e-9) << table;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 24);
+  // The two columns are different runs: dynamic removal changes the features, hence the poses.
+  EXPECT_NE(tables["ate"]["rows"][0]["baseline"]["rmse"], tables["ate"]["rows"][0]["ours"]["rmse"]);
+
+  ASSERT_EQ(tables["masks"].size(), 2u);
+  for (const json& row : tables["masks"]) {
+    for (const char* source : {"cnn", "geometry", "combined"}) {
+      EXPECT_EQ(row[source]["frames"], 40) << source;
+    }
+  }
+  // The sitting sequence's box moves during the run: its pixels were found and scored. (No CNN:
+  // --segmentation none keeps the test fast; the masks are the geometry check's.)
+  const json& box = tables["masks"][1]["moved_object"];
+  ASSERT_TRUE(box.is_object()) << tables["masks"][1].dump();
+  EXPECT_GT(box["frames"].get<int>(), 10);
+  EXPECT_GT(box["truth_px"].get<int>(), 1000);
+  EXPECT_TRUE(tables["masks"][0]["moved_object"].is_null());  // the walking preset has no box
+  ASSERT_EQ(tables["tracking"].size(), 2u);
+  EXPECT_EQ(tables["tracking"][0]["ours"]["frames_processed"], 40);
+
+  std::ifstream md_file(out / "tables.md");
+  std::stringstream md;
+  md << md_file.rdbuf();
+  EXPECT_NE(md.str().find("Table 1"), std::string::npos);
+  EXPECT_NE(md.str().find("| walk |"), std::string::npos);
+}
+
+TEST_F(Bench, MovedObjectRegionCoversTheRenderedBox) {
+  const fs::path dir = *root_ / "sit";
+  const auto source = synthetic::make_sequence_source(*sitting_);
+  const auto region = pipeline::MovedObjectRegion::load(dir.string(), sitting_->camera);
+  ASSERT_TRUE(region.has_value());
+  int frames_with_box = 0;
+  for (std::size_t i = 0; i < source->frame_count(); i += 3) {
+    const synthetic::FrameData f = source->render_frame(i);
+    int box_id = 0;
+    bool box_dynamic = false;
+    for (const auto& e : f.entities) {
+      if (e.kind == "object") {
+        box_id = e.entity;
+        box_dynamic = e.dynamic;
+      }
+    }
+    ASSERT_GT(box_id, 0);
+    const cv::Mat r = region->region(f.rgb_stamp_s);
+    if (!box_dynamic) {
+      EXPECT_TRUE(r.empty()) << "frame " << i << ": the box is static before it moves";
+      continue;
+    }
+    const cv::Mat box = f.entity == box_id;  // exact rendered box pixels
+    const int box_px = cv::countNonZero(box);
+    if (box_px == 0) continue;
+    ++frames_with_box;
+    ASSERT_FALSE(r.empty()) << "frame " << i;
+    cv::Mat found;
+    cv::bitwise_and(r, f.dynamic_mask, found);
+    cv::Mat covered;
+    cv::bitwise_and(found, box, covered);
+    // Every box pixel lies in the region ...
+    EXPECT_GE(cv::countNonZero(covered), 0.99 * box_px) << "frame " << i;
+    // ... and the other pixels found (people seen next to the box) lie within the 3-px border
+    // around the rendered box, up to corner rounding: the hull is the box's silhouette.
+    cv::Mat near_box;
+    cv::dilate(box, near_box, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(9, 9)));
+    const cv::Mat far_from_box = found & ~near_box;
+    EXPECT_LE(cv::countNonZero(far_from_box), 0.01 * box_px) << "frame " << i;
+  }
+  EXPECT_GE(frames_with_box, 5);
+}
+
+TEST(BenchInput, BadInputNamesTheFolder) {
+  // No fixture: nothing is generated, bench must stop before running anything.
+  const fs::path root = fs::temp_directory_path() /
+                        ("ddl_bench_input_" + std::to_string(static_cast<long long>(getpid())));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  std::string log;
+  const fs::path missing = root / "no_such_sequence";
+  EXPECT_EQ(run_shell(Bench::command("--sequences '" + missing.string() + "' --out '" +
+                                     (root / "bad").string() + "'"),
+                      root / "bad1.log", &log),
+            2);
+  EXPECT_NE(log.find(missing.string()), std::string::npos) << log;
+
+  const fs::path no_gt = root / "no_gt";
+  fs::create_directories(no_gt);
+  std::ofstream(no_gt / "rgb.txt") << "# empty\n";
+  EXPECT_EQ(
+      run_shell(Bench::command("--sequences '" + no_gt.string() + "'"), root / "bad2.log", &log),
+      2);
+  EXPECT_NE(log.find("groundtruth.txt"), std::string::npos) << log;
+  EXPECT_NE(log.find(no_gt.string()), std::string::npos) << log;
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace ddl
