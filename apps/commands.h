@@ -6,6 +6,8 @@
 namespace ddl::app {
 
 void add_eval_command(CLI::App& app, int& exit_code);
+void add_bench_command(CLI::App& app, int& exit_code);
+void add_eval_dense_command(CLI::App& app, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
 void add_config_command(CLI::App& app, int& exit_code);
 void add_vocab_command(CLI::App& app, int& exit_code);

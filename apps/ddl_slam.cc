@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   int exit_code = ddl::app::kOk;
   ddl::app::add_run_command(app, exit_code);
   ddl::app::add_eval_command(app, exit_code);
+  ddl::app::add_bench_command(app, exit_code);
+  ddl::app::add_eval_dense_command(app, exit_code);
   ddl::app::add_vocab_command(app, exit_code);
   ddl::app::add_synth_command(app, exit_code);
   ddl::app::add_config_command(app, exit_code);

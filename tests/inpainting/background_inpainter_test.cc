@@ -115,6 +115,34 @@ TEST(Inpainting, ExcludedSourcePixelsAreNotUsedAndStayUnfilled) {
   EXPECT_EQ(cv::countNonZero(result.depth_m == 0.0f), cv::countNonZero(mask));
 }
 
+TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
+  // The keyframe saw the wall, but a remnant its mask missed (red, 1.0 m away) sits where the
+  // current frame's person (1.5 m) is: the current ray is free up to 1.5 m, so the remnant is gone.
+  const auto cam = test_camera();
+  const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
+  const SE3 T_w_cur;
+  View kf = render(cam, T_w_kf, false);
+  const cv::Rect remnant(200, 200, 40, 40);  // projects into the person's pixels below
+  kf.depth(remnant).setTo(1.0f);
+  kf.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  View cur = render(cam, T_w_cur, true);
+  const cv::Mat mask = cur.depth < 2.0f;
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  auto red_pixels = [&](const InpaintingResult& r) {
+    cv::Mat red;
+    cv::inRange(r.bgr, cv::Scalar(0, 0, 250), cv::Scalar(5, 5, 255), red);
+    return cv::countNonZero(red & r.filled);
+  };
+  const auto checked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
+                               {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+  EXPECT_EQ(red_pixels(checked), 0);
+  config.free_space_check = false;
+  const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
+                                 {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+  EXPECT_GT(red_pixels(unchecked), 500);
+}
+
 TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
   const auto cam = test_camera();
   const SE3 T_w;

@@ -5,8 +5,11 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
+#include <set>
+#include <tuple>
 
 #include "ddl/core/error.h"
 
@@ -110,9 +113,57 @@ TEST(OctreeMap, FilesOpenWithTheOctomapLibrary) {
   EXPECT_TRUE(occupied(occupancy, 0.1, -0.1, 3.0));
   EXPECT_FALSE(occupied(occupancy, 0.0, 0.0, 1.0));
   EXPECT_GT(fs::file_size(dir / "map.ply"), 1000u);
+  // Every voxel of the wall, read back: all occupied voxels lie on the plane z = 3 (the voxel
+  // layer [3.00, 3.05) or, from depth rounding, the one below), inside the camera's view of it
+  // (3 m * 320 / 535 = 1.8 m left and right, 3 m * 248 / 539 = 1.4 m up and down), and they
+  // cover its 3.6 m x 2.7 m (the camera sees all of it; pixel_stride 4 = 2.2 cm at 3 m < 5 cm).
+  for (const std::string file : {"map.ot", "map.bt"}) {
+    const OccupiedVoxels voxels = read_occupied_voxels((dir / file).string());
+    EXPECT_EQ(voxels.resolution_m, 0.05);
+    EXPECT_EQ(voxels.centres.size(), map.stats().occupied_leaves) << file;
+    std::set<std::pair<long, long>> cells;
+    for (const Vec3d& c : voxels.centres) {
+      EXPECT_NEAR(c.z(), 3.0, 0.05) << file;
+      EXPECT_LT(std::abs(c.x()), 1.85) << file;
+      EXPECT_LT(std::abs(c.y()), 1.45) << file;
+      cells.insert({std::lround(std::floor(c.x() / 0.05)), std::lround(std::floor(c.y() / 0.05))});
+    }
+    const double wall_cells = (2 * 3.0 * 320.1 / 535.4) * (2 * 3.0 * 247.6 / 539.2) / 0.0025;
+    EXPECT_GT(static_cast<double>(cells.size()), 0.95 * wall_cells) << file;
+  }
   const cv::Mat top = map.render(false, 1);
   EXPECT_GT(cv::countNonZero(top.reshape(1) != 255), 1000);
   fs::remove_all(dir);
+}
+
+TEST(OctreeMap, ReadingExpandsPrunedLeavesIntoVoxels) {
+  // A pruned tree: 8 equal occupied children collapse into one leaf of twice the edge.
+  ::octomap::OcTree tree(0.05);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      for (int k = 0; k < 2; ++k)
+        tree.updateNode(0.025 + 0.05 * i, 0.025 + 0.05 * j, 0.025 + 0.05 * k, true);
+    }
+  }
+  tree.updateNode(1.025, 0.025, 0.025, true);
+  tree.prune();
+  std::size_t leaves = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) ++leaves;
+  ASSERT_EQ(leaves, 2u);  // the collapsed one and the single voxel
+  const fs::path path = fs::temp_directory_path() / "ddl_octomap_pruned_test.bt";
+  ASSERT_TRUE(tree.writeBinary(path.string()));
+  const OccupiedVoxels voxels = read_occupied_voxels(path.string());
+  fs::remove(path);
+  ASSERT_EQ(voxels.centres.size(), 9u);
+  std::set<std::tuple<long, long, long>> keys;
+  for (const Vec3d& c : voxels.centres) {
+    keys.insert(
+        {std::lround(c.x() / 0.025), std::lround(c.y() / 0.025), std::lround(c.z() / 0.025)});
+  }
+  EXPECT_EQ(keys.size(), 9u);
+  EXPECT_TRUE(keys.count({3, 3, 3}));   // (0.075, 0.075, 0.075)
+  EXPECT_TRUE(keys.count({41, 1, 1}));  // (1.025, 0.025, 0.025)
+  EXPECT_THROW(read_occupied_voxels("/nonexistent/map.ot"), InputError);
 }
 
 TEST(OctreeMap, ConfigErrorsNameTheKey) {

@@ -15,6 +15,8 @@ void InpaintingConfig::validate() const {
   if (num_keyframes < 1) fail("num_keyframes", "must be >= 1");
   if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");
   if (!(depth_tolerance_m >= 0)) fail("depth_tolerance_m", "must be >= 0");
+  if (!(depth_tolerance_rel >= 0 && depth_tolerance_rel < 1))
+    fail("depth_tolerance_rel", "must be in [0, 1)");
   if (!(max_depth_m > 0)) fail("max_depth_m", "must be > 0");
   if (max_hole_area_px < 0) fail("max_hole_area_px", "must be >= 0");
   if (source_stride_px < 1) fail("source_stride_px", "must be >= 1");
@@ -42,7 +44,8 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   const int w = mask.cols;
   const int h = mask.rows;
   const int r = config.splat_radius_px;
-  const float tol = static_cast<float>(config.depth_tolerance_m);
+  const float tol_abs = static_cast<float>(config.depth_tolerance_m);
+  const float tol_rel = static_cast<float>(config.depth_tolerance_rel);
   const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
 
   const std::size_t count =
@@ -68,14 +71,17 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
         const int iv = static_cast<int>(std::lround(vc));
         if (iu < -r || iv < -r || iu >= w + r || iv >= h + r) continue;
         const float zc = static_cast<float>(p.z());
+        const float tol = tol_abs + tol_rel * zc;
         for (int dv = -r; dv <= r; ++dv) {
           const int y = iv + dv;
           if (y < 0 || y >= h) continue;
           const std::uint8_t* mrow = mask.ptr(y);
+          const float* drow_cur = depth_m.ptr<float>(y);
           float* zrow = zbuf.ptr<float>(y);
           for (int du = -r; du <= r; ++du) {
             const int x = iu + du;
             if (x < 0 || x >= w || mrow[x] == 0) continue;
+            if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) continue;
             // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
             if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
                                        out.filled.at<std::uint8_t>(y, x) != 2)) {

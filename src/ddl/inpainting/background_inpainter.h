@@ -8,6 +8,12 @@
 // and their already repaired content is used (each keyframe stores its repaired images), so the
 // background spreads over time. Pixels no keyframe saw remain in the `unfilled` mask; an optional
 // image-based fill (OpenCV Telea inpainting) closes holes smaller than `max_hole_area_px`.
+// Two checks keep the projected content to the hidden background: samples within the depth
+// tolerance (absolute + relative, as Kinect noise and disparity steps grow with depth) count as
+// one surface, so the newest keyframe's centre sample wins over noisy older ones instead of
+// a mosaic of sources; and a sample nearer than what the current frame measures at that pixel
+// (by more than the tolerance) is rejected: the current ray is free up to its depth, so such a
+// sample is content that is gone (a moving object a source keyframe's mask missed).
 // Thread-safety: pure functions of their inputs.
 
 #include <opencv2/core.hpp>
@@ -22,6 +28,8 @@ struct InpaintingConfig {
   int num_keyframes = 15;              // last keyframes projected (paper: 15)
   int splat_radius_px = 1;             // each source pixel covers (2r+1)^2 target pixels (0 = one)
   double depth_tolerance_m = 0.02;     // z-buffer: nearer by more than this wins
+  double depth_tolerance_rel = 0.03;   // tolerance grows by this fraction of the depth (noise)
+  bool free_space_check = true;        // reject samples in front of the current frame's depth
   double max_depth_m = 6.0;            // ignore source depth beyond this
   bool image_fill_small_holes = true;  // Telea fill for holes left after projection
   int max_hole_area_px = 400;          // only holes (connected components) up to this size

@@ -1,11 +1,15 @@
 #include "ddl/octomap/octree_map.h"
 
 #include <fmt/format.h>
+#include <octomap/AbstractOcTree.h>
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
@@ -196,6 +200,53 @@ OctreeStats OctreeMap::stats() const {
     }
   }
   return s;
+}
+
+namespace {
+
+template <typename Tree>
+void collect_occupied(const Tree& tree, OccupiedVoxels& out) {
+  const double res = tree.getResolution();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const auto c = it.getCoordinate();
+    // A leaf above the finest depth covers n^3 finest voxels (n = 2^(16 - depth)).
+    const int n = std::max(1, static_cast<int>(std::lround(it.getSize() / res)));
+    const double first = -0.5 * it.getSize() + 0.5 * res;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        for (int k = 0; k < n; ++k) {
+          out.centres.emplace_back(c.x() + first + i * res, c.y() + first + j * res,
+                                   c.z() + first + k * res);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+OccupiedVoxels read_occupied_voxels(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw InputError::at(path, "no such map file");
+  OccupiedVoxels out;
+  if (std::filesystem::path(path).extension() == ".bt") {
+    ::octomap::OcTree tree(0.1);
+    if (!tree.readBinary(path)) throw InputError::at(path, "not a binary OctoMap (.bt) file");
+    out.resolution_m = tree.getResolution();
+    collect_occupied(tree, out);
+    return out;
+  }
+  std::unique_ptr<::octomap::AbstractOcTree> tree(::octomap::AbstractOcTree::read(path));
+  if (tree == nullptr) throw InputError::at(path, "not an OctoMap (.ot) file");
+  out.resolution_m = tree->getResolution();
+  if (const auto* colour = dynamic_cast<const ::octomap::ColorOcTree*>(tree.get())) {
+    collect_occupied(*colour, out);
+  } else if (const auto* occupancy = dynamic_cast<const ::octomap::OcTree*>(tree.get())) {
+    collect_occupied(*occupancy, out);
+  } else {
+    throw InputError::at(path, fmt::format("unsupported octree type {}", tree->getTreeType()));
+  }
+  return out;
 }
 
 }  // namespace ddl::octomap

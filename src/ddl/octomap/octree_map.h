@@ -10,6 +10,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
@@ -83,5 +84,18 @@ class OctreeMap {
   std::size_t scans_ = 0;
   double last_ms_ = 0.0;
 };
+
+/// The occupied voxels of a map file, as evaluations need them.
+struct OccupiedVoxels {
+  double resolution_m = 0.0;
+  std::vector<Vec3d> centres;  // map frame; one per finest-level voxel
+};
+
+/// Reads a map written by OctreeMap (.ot: any OcTree type through AbstractOcTree::read; .bt:
+/// binary OcTree) with the OctoMap library and lists the centres of its occupied voxels. A pruned
+/// leaf (a coarser node standing for 8^k equal children) is expanded into its finest-level voxels,
+/// so every occupied voxel counts once whatever the tree's pruning. Throws ddl::InputError naming
+/// the file when it cannot be read.
+OccupiedVoxels read_occupied_voxels(const std::string& path);
 
 }  // namespace ddl::octomap

@@ -1,0 +1,132 @@
+// `ddl_slam eval-dense`: a run's repaired keyframes and octree map against a synthetic sequence's
+// ground truth (docs/dense.md).
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "ddl/config/dataset_config.h"
+#include "ddl/core/error.h"
+#include "ddl/eval/dense_eval.h"
+#include "ddl/octomap/octree_map.h"
+
+namespace ddl::app {
+namespace {
+namespace fs = std::filesystem;
+
+struct EvalDenseArgs {
+  eval::DenseEvalInputs inputs;
+  eval::DenseEvalOptions options;
+  std::string camera;
+  std::string map_path;
+  bool no_map = false;
+  std::string json_path;
+  std::string montage_path;
+  int montage_rows = 3;
+  int montage_tile_width = 240;
+};
+
+int run_eval_dense(const EvalDenseArgs& args) {
+  eval::DenseEvalInputs inputs = args.inputs;
+  inputs.camera = config::resolve_dataset_camera(inputs.sequence_dir, args.camera);
+  if (!args.no_map) {
+    std::string path = args.map_path;
+    if (path.empty()) {
+      for (const char* name : {"map.ot", "map.bt"}) {
+        if (fs::exists(fs::path(inputs.run_dir) / name)) {
+          path = (fs::path(inputs.run_dir) / name).string();
+          break;
+        }
+      }
+    }
+    if (path.empty()) {
+      spdlog::warn("{}: no map.ot or map.bt, map not evaluated", inputs.run_dir);
+    } else {
+      const octomap::OccupiedVoxels voxels = octomap::read_occupied_voxels(path);
+      inputs.map = eval::MapVoxels{path, voxels.resolution_m, voxels.centres};
+    }
+  }
+  const eval::DenseEvalResult result = eval::evaluate_dense(inputs, args.options);
+  std::fputs(eval::format_dense_report(result).c_str(), stdout);
+  std::fflush(stdout);
+  if (!args.json_path.empty()) {
+    if (fs::path(args.json_path).has_parent_path()) {
+      fs::create_directories(fs::path(args.json_path).parent_path());
+    }
+    std::ofstream file(args.json_path);
+    file << eval::to_json(result).dump(2) << '\n';
+    if (!file) throw InputError::at(args.json_path, "cannot write");
+    spdlog::info("wrote {}", args.json_path);
+  }
+  if (!args.montage_path.empty()) {
+    const cv::Mat montage =
+        eval::inpainting_montage(result, args.montage_rows, args.montage_tile_width);
+    if (montage.empty()) {
+      spdlog::warn("no repaired keyframes: no montage written");
+    } else if (!cv::imwrite(args.montage_path, montage, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
+      throw InputError::at(args.montage_path, "cannot write");
+    } else {
+      spdlog::info("wrote {}", args.montage_path);
+    }
+  }
+  return kOk;
+}
+
+}  // namespace
+
+void add_eval_dense_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<EvalDenseArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "eval-dense",
+      "Evaluate a run's dense outputs against a synthetic sequence's exact ground truth "
+      "(docs/dense.md). Inpainting: the repaired keyframes of `run --save-inpainted` "
+      "(<run>/inpainted/) against background/rgb and background/depth: fraction of the true "
+      "dynamic pixels filled (of all, and of those an earlier keyframe saw), PSNR and median "
+      "depth error over the filled pixels, beside the unfilled original frame. Map: the occupied "
+      "voxels of <run>/map.ot, aligned to the ground truth as ATE aligns CameraTrajectory.txt, "
+      "classified as near the true static geometry (background/depth at the true poses), ghost "
+      "(near only dynamic geometry: depth/ under dynamic_mask/) or other.");
+  cmd->add_option("--sequence", args->inputs.sequence_dir,
+                  "Synthetic sequence folder (written by `ddl_slam synth`)")
+      ->required();
+  cmd->add_option("--run", args->inputs.run_dir, "Output folder of `ddl_slam run`")->required();
+  cmd->add_option("--camera", args->camera,
+                  "Camera of the sequence (as `run --camera`); default <sequence>/camera.yaml");
+  cmd->add_option("--map", args->map_path, "Octree file to evaluate; default <run>/map.ot");
+  cmd->add_flag("--no-map", args->no_map, "Evaluate the inpainting only");
+  cmd->add_option("--json", args->json_path, "Write the results as JSON to this file");
+  cmd->add_option("--montage", args->montage_path,
+                  "Write a PNG of repaired keyframes beside their originals and the true "
+                  "background");
+  cmd->add_option("--montage-rows", args->montage_rows, "Keyframes in the montage")
+      ->check(CLI::Range(1, 12))
+      ->capture_default_str();
+  cmd->add_option("--montage-tile-width", args->montage_tile_width, "Tile width in pixels")
+      ->check(CLI::Range(64, 640))
+      ->capture_default_str();
+  cmd->add_option("--previous-keyframes", args->options.previous_keyframes,
+                  "A dynamic pixel is 'seen' when one of this many earlier keyframes saw its "
+                  "background point")
+      ->capture_default_str();
+  cmd->add_option("--frame-stride", args->options.frame_stride,
+                  "Reference geometry from every n-th frame of the run (and every keyframe)")
+      ->capture_default_str();
+  cmd->add_option("--pixel-stride", args->options.pixel_stride,
+                  "Reference geometry from every n-th pixel in u and v")
+      ->capture_default_str();
+  cmd->add_option("--radius-voxels", args->options.radius_voxels,
+                  "A voxel is near geometry within this many voxel edges")
+      ->capture_default_str();
+  cmd->callback(
+      [args, &exit_code] { exit_code = run_guarded([&] { return run_eval_dense(*args); }); });
+}
+
+}  // namespace ddl::app
