@@ -3,6 +3,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
+#include <vector>
 
 #include "ddl/core/error.h"
 
@@ -47,6 +48,11 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   const float tol_abs = static_cast<float>(config.depth_tolerance_m);
   const float tol_rel = static_cast<float>(config.depth_tolerance_rel);
   const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  // Most source pixels land outside the mask: reject them with one lookup in the mask grown by
+  // the splat radius (and its bounding box) instead of testing every splat position.
+  cv::Mat reach;
+  cv::dilate(mask != 0, reach, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
+  const cv::Rect reach_box = cv::boundingRect(reach);
 
   const std::size_t count =
       std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
@@ -69,7 +75,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
         const double vc = fy * p.y() / p.z() + cy;
         const int iu = static_cast<int>(std::lround(uc));
         const int iv = static_cast<int>(std::lround(vc));
-        if (iu < -r || iv < -r || iu >= w + r || iv >= h + r) continue;
+        if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
         const float zc = static_cast<float>(p.z());
         const float tol = tol_abs + tol_rel * zc;
         for (int dv = -r; dv <= r; ++dv) {
@@ -106,10 +112,16 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       cv::countNonZero(unfilled) > 0) {
     cv::Mat labels, stats, centroids;
     const int n = cv::connectedComponentsWithStats(unfilled, labels, stats, centroids, 8);
-    cv::Mat small = cv::Mat::zeros(mask.size(), CV_8UC1);
+    // One pass over the labels (not one image comparison per component).
+    std::vector<std::uint8_t> is_small(static_cast<std::size_t>(n), 0);
     for (int i = 1; i < n; ++i) {
-      if (stats.at<int>(i, cv::CC_STAT_AREA) <= config.max_hole_area_px)
-        small.setTo(255, labels == i);
+      if (stats.at<int>(i, cv::CC_STAT_AREA) <= config.max_hole_area_px) is_small[i] = 255;
+    }
+    cv::Mat small(mask.size(), CV_8UC1);
+    for (int y = 0; y < labels.rows; ++y) {
+      const int* lrow = labels.ptr<int>(y);
+      std::uint8_t* srow = small.ptr(y);
+      for (int x = 0; x < labels.cols; ++x) srow[x] = is_small[static_cast<std::size_t>(lrow[x])];
     }
     if (cv::countNonZero(small) > 0) {
       cv::Mat filled_bgr;
