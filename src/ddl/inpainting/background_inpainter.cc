@@ -13,7 +13,7 @@ void InpaintingConfig::validate() const {
   auto fail = [](const char* key, const char* what) {
     throw ConfigError::for_key(std::string("inpainting.") + key, what);
   };
-  if (num_keyframes < 1) fail("num_keyframes", "must be >= 1");
+  if (num_keyframes < 1 || num_keyframes > 255) fail("num_keyframes", "must be in 1..255");
   if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");
   if (!(depth_tolerance_m >= 0)) fail("depth_tolerance_m", "must be >= 0");
   if (!(depth_tolerance_rel >= 0 && depth_tolerance_rel < 1))
@@ -22,6 +22,68 @@ void InpaintingConfig::validate() const {
   if (max_hole_area_px < 0) fail("max_hole_area_px", "must be >= 0");
   if (source_stride_px < 1) fail("source_stride_px", "must be >= 1");
 }
+
+namespace {
+
+/// Splatting copies a source pixel to the nearest target pixels, which shifts fine texture by up
+/// to half a pixel (more with the splat radius). Each filled pixel instead takes its colour from
+/// the winning source, at the position where its splatted 3-D point lands there, bilinearly;
+/// positions next to excluded source pixels, or whose four source pixels do not all see that
+/// point (depth off by more than the tolerance: an occluder or a depth edge), keep the splatted
+/// colour.
+void resample_colour(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& winner,
+                     const SE3& T_c_w, const std::vector<SourceView>& sources,
+                     const camera::PinholeCamera& camera, const InpaintingConfig& config) {
+  std::vector<SE3> T_src_cur;
+  for (const SourceView& src : sources) T_src_cur.push_back(src.T_w_c.inverse() * T_c_w.inverse());
+  for (int y = 0; y < out.filled.rows; ++y) {
+    const std::uint8_t* frow = out.filled.ptr(y);
+    const float* zrow = zbuf.ptr<float>(y);
+    const std::uint8_t* wrow = winner.ptr(y);
+    cv::Vec3b* crow = out.bgr.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < out.filled.cols; ++x) {
+      if (frow[x] == 0) continue;
+      const SourceView& src = sources[wrow[x]];
+      const double z = zrow[x];
+      const Vec3d p = T_src_cur[wrow[x]] *
+                      Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
+      if (p.z() <= 0.05) continue;
+      const double us = camera.fx * p.x() / p.z() + camera.cx;
+      const double vs = camera.fy * p.y() / p.z() + camera.cy;
+      const int u0 = static_cast<int>(std::floor(us));
+      const int v0 = static_cast<int>(std::floor(vs));
+      if (u0 < 0 || v0 < 0 || u0 + 1 >= src.bgr.cols || v0 + 1 >= src.bgr.rows) continue;
+      if (!src.exclude_mask.empty() && (src.exclude_mask.at<std::uint8_t>(v0, u0) |
+                                        src.exclude_mask.at<std::uint8_t>(v0, u0 + 1) |
+                                        src.exclude_mask.at<std::uint8_t>(v0 + 1, u0) |
+                                        src.exclude_mask.at<std::uint8_t>(v0 + 1, u0 + 1)) != 0) {
+        continue;
+      }
+      const float tol =
+          static_cast<float>(config.depth_tolerance_m + config.depth_tolerance_rel * p.z());
+      bool consistent = true;
+      for (int dv = 0; dv <= 1 && consistent; ++dv) {
+        for (int du = 0; du <= 1 && consistent; ++du) {
+          consistent = std::abs(src.depth_m.at<float>(v0 + dv, u0 + du) - p.z()) <= tol;
+        }
+      }
+      if (!consistent) continue;
+      const double a = us - u0;
+      const double b = vs - v0;
+      const cv::Vec3b& c00 = src.bgr.at<cv::Vec3b>(v0, u0);
+      const cv::Vec3b& c01 = src.bgr.at<cv::Vec3b>(v0, u0 + 1);
+      const cv::Vec3b& c10 = src.bgr.at<cv::Vec3b>(v0 + 1, u0);
+      const cv::Vec3b& c11 = src.bgr.at<cv::Vec3b>(v0 + 1, u0 + 1);
+      for (int k = 0; k < 3; ++k) {
+        const double value =
+            (1 - b) * ((1 - a) * c00[k] + a * c01[k]) + b * ((1 - a) * c10[k] + a * c11[k]);
+        crow[x][k] = cv::saturate_cast<std::uint8_t>(value);
+      }
+    }
+  }
+}
+
+}  // namespace
 
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
                          const SE3& T_c_w, const std::vector<SourceView>& sources,
@@ -56,6 +118,8 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
 
   const std::size_t count =
       std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
+  // Which source won each pixel (for the colour resampling below).
+  cv::Mat winner(mask.size(), CV_8UC1, cv::Scalar(0));
   for (std::size_t s = 0; s < count; ++s) {
     const SourceView& src = sources[s];
     const SE3 T_cur_src = T_c_w * src.T_w_c;
@@ -95,6 +159,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
               out.bgr.at<cv::Vec3b>(y, x) = crow[u];
               out.depth_m.at<float>(y, x) = zc;
               out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
+              winner.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(s);
             }
           }
         }
@@ -103,6 +168,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   }
   out.filled = out.filled != 0;
   out.filled_pixels = cv::countNonZero(out.filled);
+  if (config.resample_colour) resample_colour(out, zbuf, winner, T_c_w, sources, camera, config);
 
   cv::Mat unfilled;
   cv::bitwise_and(mask != 0, out.filled == 0, unfilled);

@@ -34,6 +34,8 @@ struct InpaintingConfig {
   bool image_fill_small_holes = true;  // Telea fill for holes left after projection
   int max_hole_area_px = 400;          // only holes (connected components) up to this size
   int source_stride_px = 1;            // sample every n-th source pixel (speed/quality trade-off)
+  bool resample_colour = true;  // colour read back bilinearly from the winning keyframe at the
+                                // splatted depth (sub-pixel exact) instead of the splatted sample
 
   /// Throws ddl::ConfigError naming "inpainting.<field>".
   void validate() const;

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
 
@@ -13,6 +14,9 @@ namespace fs = std::filesystem;
 
 void DenseMapperConfig::validate() const {
   if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
+  if (mask_border_px < 0 || mask_border_px > 50) {
+    throw ConfigError::for_key("dense.mask_border_px", "must be in 0..50");
+  }
   inpainting.validate();
   octree.validate();
 }
@@ -65,7 +69,7 @@ void DenseMapper::finish() {
 
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
-  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat()};
+  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat()};
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
   if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
@@ -74,7 +78,7 @@ void DenseMapper::process(DenseKeyframe item) {
         stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes));
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
-      sources.push_back({s.keyframe->T_w_c(), s.bgr, s.depth_m, s.unfilled});
+      sources.push_back({s.keyframe->T_w_c(), s.bgr, s.depth_m, s.exclude});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
         item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
@@ -88,6 +92,13 @@ void DenseMapper::process(DenseKeyframe item) {
   } else {
     // Without inpainting the dynamic pixels are simply left out of the map.
     stored.unfilled = mask;
+  }
+  stored.exclude = stored.unfilled;
+  if (config_.mask_border_px > 0 && cv::countNonZero(mask) > 0) {
+    cv::Mat grown;
+    const int k = 2 * config_.mask_border_px + 1;
+    cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
+    stored.exclude = stored.unfilled | (grown & ~mask);
   }
   timings_.record("inpainting", watch.elapsed_ms());
 
@@ -114,7 +125,7 @@ void DenseMapper::process(DenseKeyframe item) {
       timings_.record("octomap_rebuild", watch.elapsed_ms());
     } else {
       octree_->integrate({item.keyframe->id(), item.keyframe->T_w_c(), stored.bgr, stored.depth_m,
-                          stored.unfilled});
+                          stored.exclude});
       stored_.push_back(std::move(stored));
       timings_.record("octomap", watch.elapsed_ms());
     }
@@ -130,7 +141,7 @@ void DenseMapper::rebuild_octree() {
   octree_->clear();
   for (const Stored& s : stored_) {
     if (s.keyframe->is_bad()) continue;
-    octree_->integrate({s.keyframe->id(), s.keyframe->T_w_c(), s.bgr, s.depth_m, s.unfilled});
+    octree_->integrate({s.keyframe->id(), s.keyframe->T_w_c(), s.bgr, s.depth_m, s.exclude});
   }
   std::lock_guard lock(stats_mutex_);
   ++stats_.octree_rebuilds;

@@ -33,6 +33,9 @@ struct DenseMapperConfig {
   bool threaded = false;           // own thread (threaded pipeline mode)
   std::size_t queue_capacity = 8;  // keyframes waiting (threaded)
   std::string save_inpainted_dir;  // non-empty: write repaired keyframes here
+  /// Pixels this close outside a keyframe's dynamic mask (object edges the mask missed) are
+  /// neither a background source for later keyframes nor put into the octree.
+  int mask_border_px = 12;
   inpainting::InpaintingConfig inpainting;
   octomap::OctreeConfig octree;
 
@@ -78,6 +81,7 @@ class DenseMapper {
     cv::Mat bgr;       // repaired
     cv::Mat depth_m;   // repaired
     cv::Mat unfilled;  // still-dynamic pixels
+    cv::Mat exclude;   // unfilled and the border band around the mask: not a source, not mapped
   };
   void worker();
   void process(DenseKeyframe item);
