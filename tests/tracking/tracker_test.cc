@@ -284,5 +284,21 @@ TEST(TrackerTest, DynamicMaskKeepsTrackingOnTheRest) {
   }
 }
 
+TEST(TrackerTest, RefusesAVocabularyOfAnotherDescriptorPattern) {
+  auto other = std::make_shared<vocabulary::Vocabulary>(*testing::room_vocabulary());
+  other->set_descriptor_tag(0x0123456789abcdefull);
+  auto map = std::make_shared<map::Map>();
+  try {
+    Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map, other, nullptr);
+    FAIL() << "expected ddl::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("another ORB descriptor"), std::string::npos) << e.what();
+  }
+  // An untagged vocabulary (tag 0: not recorded) and the matching tag are accepted.
+  other->set_descriptor_tag(0);
+  EXPECT_NO_THROW(
+      Tracker(testing::test_tracker_config(), testing::test_camera(), map, other, nullptr));
+}
+
 }  // namespace
 }  // namespace ddl::tracking

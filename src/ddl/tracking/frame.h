@@ -154,6 +154,7 @@ class FrameBuilder {
 
   const std::shared_ptr<const FrameGeometry>& geometry() const { return geometry_; }
   const features::ScalePyramid& scale_pyramid() const { return extractor_.scale_pyramid(); }
+  const features::BriefPattern& brief_pattern() const { return extractor_.pattern(); }
 
  private:
   std::shared_ptr<const FrameGeometry> geometry_;

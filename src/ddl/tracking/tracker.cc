@@ -1,5 +1,6 @@
 #include "ddl/tracking/tracker.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "ddl/core/error.h"
@@ -65,7 +66,18 @@ Tracker::Tracker(const TrackerConfig& config, const camera::PinholeCamera& camer
       estimator_(*builder_.geometry(), config_.optimizer),
       local_map_(config_.matching),
       relocalizer_(config_.relocalization, config_.frame.bow_levels_up, map_, vocabulary_,
-                   database_) {}
+                   database_) {
+  // A vocabulary trained on descriptors of another BRIEF pattern gives meaningless words.
+  const features::BriefPattern& pattern = builder_.brief_pattern();
+  const std::uint64_t tag = vocabulary::descriptor_fingerprint(pattern.data(), sizeof(pattern));
+  if (vocabulary_->descriptor_tag() != 0 && vocabulary_->descriptor_tag() != tag) {
+    throw Error(fmt::format(
+        "the vocabulary was trained for another ORB descriptor (BRIEF pattern tag {:016x}, this "
+        "build's extractor has {:016x}): train one with `ddl_slam vocab train` or use the one "
+        "shipped in vocab/",
+        vocabulary_->descriptor_tag(), tag));
+  }
+}
 
 Frame Tracker::prepare_frame(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask) {
   const Stopwatch watch;
