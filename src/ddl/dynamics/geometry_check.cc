@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
-#include <queue>
 
 #include "ddl/core/error.h"
 
@@ -22,15 +21,16 @@ void GeometryCheckConfig::validate() const {
   if (!(min_depth_m >= 0 && max_depth_m > min_depth_m))
     fail("max_depth_m", "must exceed min_depth_m");
   if (max_points_per_keyframe < 1) fail("max_points_per_keyframe", "must be >= 1");
+  if (window_radius_px < 0 || window_radius_px > 10) fail("window_radius_px", "must be in 0..10");
   if (min_seed_support < 1) fail("min_seed_support", "must be >= 1");
   if (!(region_depth_band_m > 0)) fail("region_depth_band_m", "must be > 0");
   if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
   if (dilation_px < 0) fail("dilation_px", "must be >= 0");
-  if (!(occluder_agreement_m >= 0)) fail("occluder_agreement_m", "must be >= 0");
 }
 
 cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds,
-                     const GeometryCheckConfig& config) {
+                     const GeometryCheckConfig& config,
+                     const std::function<bool(cv::Point)>& may_join) {
   cv::Mat region_id(depth_m.size(), CV_32SC1, cv::Scalar(0));
   cv::Mat out = cv::Mat::zeros(depth_m.size(), CV_8UC1);
   const int r2_max = config.region_max_radius_px * config.region_max_radius_px;
@@ -44,6 +44,7 @@ cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds
       ++support[static_cast<std::size_t>(existing - 1)];
       continue;
     }
+    if (existing < 0) continue;  // vetoed
     const float d0 = depth_m.at<float>(seed);
     if (d0 <= 0.0f) continue;
     const int id = static_cast<int>(regions.size()) + 1;
@@ -56,6 +57,9 @@ cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds
       const cv::Point p = stack.back();
       stack.pop_back();
       regions.back().push_back(p);
+      // Depth-continuous neighbours: within tau(z) of the pixel they are reached from.
+      const float dp = depth_m.at<float>(p);
+      const float step = static_cast<float>(config.threshold_at(dp));
       static constexpr int kDx[4] = {1, -1, 0, 0};
       static constexpr int kDy[4] = {0, 0, 1, -1};
       for (int k = 0; k < 4; ++k) {
@@ -66,7 +70,11 @@ cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds
         const int dy = q.y - seed.y;
         if (dx * dx + dy * dy > r2_max) continue;
         const float d = depth_m.at<float>(q);
-        if (d <= 0.0f || std::abs(d - d0) > band) continue;
+        if (d <= 0.0f || std::abs(d - d0) > band || std::abs(d - dp) > step) continue;
+        if (may_join && !may_join(q)) {
+          region_id.at<int>(q) = -1;  // asked once
+          continue;
+        }
         region_id.at<int>(q) = id;
         stack.push_back(q);
       }
@@ -81,22 +89,75 @@ cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds
 
 namespace {
 
-// True when the surface measured at current pixel (u, v) was also there when the reference
-// keyframe looked: then what hides the reference's point is static structure.
-bool occluder_seen_by_reference(const ReferenceView& ref, const SE3& T_w_cur,
-                                const camera::PinholeCamera& camera, int u, int v, double z_meas,
-                                double tau, const GeometryCheckConfig& config) {
-  const Vec3d p_w = T_w_cur * camera.unproject(u, v, z_meas);
-  const Vec3d p_ref = ref.T_w_c.inverse() * p_w;
-  if (p_ref.z() <= config.min_depth_m) return false;
-  const Vec2d uv = camera.project(p_ref);
-  const int ur = static_cast<int>(std::lround(uv.x()));
-  const int vr = static_cast<int>(std::lround(uv.y()));
-  const cv::Mat& d = ref.depth_image_m;
-  if (ur < 0 || vr < 0 || ur >= d.cols || vr >= d.rows) return false;
-  const float z_ref = d.at<float>(vr, ur);
-  if (z_ref <= 0.0f) return false;
-  return std::abs(z_ref - p_ref.z()) < config.occluder_agreement_m + 0.5 * tau;
+// Region growth asks the references about every pixel it reaches: a 3x3 window there (the seeds'
+// window_radius_px guards against edges; growth only needs "same surface nearby"), decided per
+// 2x2 block.
+constexpr int kGrowthWindowRadius = 1;
+constexpr int kGrowthBlock = 2;
+
+enum class Evidence { kNone, kStatic, kMoved };
+
+// A reference with a depth image, prepared for dense look-ups from current pixels:
+// p_ref = z * (A * [u v 1]) + t with A = R_ref_cur * K^-1, t = the current camera centre in the
+// reference frame.
+struct Reference {
+  const ReferenceView* view;
+  Mat3d A;
+  Vec3d t;
+};
+
+// What reference `ref` measured around the projection of current pixel (u, v) at depth z:
+// kStatic when a valid pixel of the (2 r + 1)^2 window is within tau of the point's depth (the
+// reference saw this surface there), kMoved when every valid pixel of the window - at least half
+// of them - is farther by more than tau (the reference saw through the point: it was not there),
+// kNone otherwise (out of view, too little depth, hidden behind something nearer, or seen under a
+// wider parallax than max_parallax_deg).
+Evidence reference_evidence(const Reference& ref, double u, double v, double z,
+                            const camera::PinholeCamera& camera, const GeometryCheckConfig& config,
+                            double cos_max_parallax, int r) {
+  const Vec3d p = z * (ref.A * Vec3d(u, v, 1.0)) + ref.t;
+  if (p.z() <= config.min_depth_m) return Evidence::kNone;
+  // Parallax between the rays from both camera centres to the point.
+  const Vec3d from_cur = p - ref.t;
+  if (p.dot(from_cur) < cos_max_parallax * std::sqrt(p.squaredNorm() * from_cur.squaredNorm()))
+    return Evidence::kNone;
+  const int uc = static_cast<int>(cvRound(camera.fx * p.x() / p.z() + camera.cx));
+  const int vc = static_cast<int>(cvRound(camera.fy * p.y() / p.z() + camera.cy));
+  const cv::Mat& d = ref.view->depth_image_m;
+  if (uc - r < 0 || vc - r < 0 || uc + r >= d.cols || vc + r >= d.rows) return Evidence::kNone;
+  const float zp = static_cast<float>(p.z());
+  const float tau = static_cast<float>(config.threshold_at(p.z()));
+  int valid = 0;
+  bool all_behind = true;
+  for (int y = vc - r; y <= vc + r; ++y) {
+    const float* row = d.ptr<float>(y);
+    for (int x = uc - r; x <= uc + r; ++x) {
+      const float zr = row[x];
+      if (zr <= 0.0f) continue;
+      ++valid;
+      if (std::abs(zr - zp) <= tau) return Evidence::kStatic;
+      if (zr <= zp + tau) all_behind = false;
+    }
+  }
+  const int window = (2 * r + 1) * (2 * r + 1);
+  return all_behind && 2 * valid >= window ? Evidence::kMoved : Evidence::kNone;
+}
+
+// True when every valid current pixel of the window around (u, v) - at least half of them - is
+// nearer than z_proj - tau: the point the reference saw is hidden here, not just next to an edge.
+bool hidden_in_current(const cv::Mat& depth_m, int uc, int vc, double z_proj, double tau, int r) {
+  if (uc - r < 0 || vc - r < 0 || uc + r >= depth_m.cols || vc + r >= depth_m.rows) return false;
+  const float limit = static_cast<float>(z_proj - tau);
+  int valid = 0;
+  for (int v = vc - r; v <= vc + r; ++v) {
+    const float* row = depth_m.ptr<float>(v);
+    for (int u = uc - r; u <= uc + r; ++u) {
+      if (row[u] <= 0.0f) continue;
+      if (row[u] >= limit) return false;
+      ++valid;
+    }
+  }
+  return 2 * valid >= (2 * r + 1) * (2 * r + 1);
 }
 
 }  // namespace
@@ -109,21 +170,32 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
   GeometryCheckStats local;
   const double cos_max_parallax = std::cos(config.max_parallax_deg * M_PI / 180.0);
   const SE3 T_w_c = T_c_w.inverse();
-  const Vec3d center_cur_w = T_w_c.translation();
-  std::vector<cv::Point> seeds;
+  const Vec3d centre_cur_w = T_w_c.translation();
   const int limit =
       std::min<int>(config.max_reference_keyframes, static_cast<int>(references.size()));
+  std::vector<Reference> dense;  // references with a depth image
   for (int r = 0; r < limit; ++r) {
-    const ReferenceView& ref = references[static_cast<std::size_t>(r)];
-    const std::size_t n = ref.pixels.size();
+    const ReferenceView& view = references[static_cast<std::size_t>(r)];
+    if (view.depth_image_m.empty()) continue;
+    if (view.depth_image_m.type() != CV_32FC1)
+      throw Error("geometry check: reference depth must be CV_32FC1 metres");
+    const SE3 T_ref_cur = view.T_w_c.inverse() * T_w_c;
+    const Mat3d K_inv = (Mat3d() << 1.0 / camera.fx, 0.0, -camera.cx / camera.fx, 0.0,
+                         1.0 / camera.fy, -camera.cy / camera.fy, 0.0, 0.0, 1.0)
+                            .finished();
+    dense.push_back({&view, T_ref_cur.rotation() * K_inv, T_ref_cur.translation()});
+  }
+  std::vector<cv::Point> seeds;
+  for (const Reference& ref : dense) {
+    const ReferenceView& view = *ref.view;
+    const std::size_t n = view.pixels.size();
     const std::size_t step =
         std::max<std::size_t>(1, n / static_cast<std::size_t>(config.max_points_per_keyframe));
-    const Vec3d center_ref_w = ref.T_w_c.translation();
-    const SE3 T_cur_ref = T_c_w * ref.T_w_c;
+    const SE3 T_cur_ref = T_c_w * view.T_w_c;
     for (std::size_t i = 0; i < n; i += step) {
-      const double z_ref = ref.depth_m[i];
+      const double z_ref = view.depth_m[i];
       if (z_ref < config.min_depth_m || z_ref > config.max_depth_m) continue;
-      const Vec3d p_ref = camera.unproject(ref.pixels[i].x, ref.pixels[i].y, z_ref);
+      const Vec3d p_ref = camera.unproject(view.pixels[i].x, view.pixels[i].y, z_ref);
       const Vec3d p_cur = T_cur_ref * p_ref;
       if (p_cur.z() <= config.min_depth_m) continue;
       const Vec2d uv = camera.project(p_cur);
@@ -132,9 +204,9 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       if (u < 0 || v < 0 || u >= depth_m.cols || v >= depth_m.rows) continue;
       ++local.points_tested;
       // Parallax between the rays from both camera centres to the point.
-      const Vec3d p_w = ref.T_w_c * p_ref;
-      const Vec3d ray_ref = (p_w - center_ref_w).normalized();
-      const Vec3d ray_cur = (p_w - center_cur_w).normalized();
+      const Vec3d p_w = view.T_w_c * p_ref;
+      const Vec3d ray_ref = (p_w - view.T_w_c.translation()).normalized();
+      const Vec3d ray_cur = (p_w - centre_cur_w).normalized();
       if (ray_ref.dot(ray_cur) < cos_max_parallax) {
         ++local.points_skipped_parallax;
         continue;
@@ -142,11 +214,13 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       const float z_meas = depth_m.at<float>(v, u);
       if (z_meas < config.min_depth_m || z_meas > config.max_depth_m) continue;
       const double z_proj = p_cur.z();
-      const double tau =
-          config.depth_threshold_m + config.depth_threshold_quadratic * z_proj * z_proj;
-      if (z_proj - z_meas <= tau) continue;
-      if (!ref.depth_image_m.empty() &&
-          occluder_seen_by_reference(ref, T_w_c, camera, u, v, z_meas, tau, config)) {
+      if (!hidden_in_current(depth_m, u, v, z_proj, config.threshold_at(z_proj),
+                             config.window_radius_px)) {
+        continue;
+      }
+      // Back-check: did the reference see through what hides its point now?
+      if (reference_evidence(ref, u, v, z_meas, camera, config, cos_max_parallax,
+                             config.window_radius_px) != Evidence::kMoved) {
         ++local.points_rejected_static_occluder;
         continue;
       }
@@ -154,7 +228,31 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       seeds.emplace_back(u, v);
     }
   }
-  cv::Mat mask = grow_regions(depth_m, seeds, config);
+  // Regions do not grow into pixels that every reference saw as the same surface (the desk
+  // around a box put down on it, the floor around a person's feet). One reference that saw
+  // through the pixel, or could not see it (out of view, hidden, wide parallax), lets it join:
+  // a person who moved less than their width since the latest keyframe looks static in that one,
+  // not in the older ones.
+  auto may_join_pixel = [&](cv::Point q) {
+    const double z = depth_m.at<float>(q);
+    for (const Reference& ref : dense) {
+      if (reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
+                             kGrowthWindowRadius) != Evidence::kStatic) {
+        return true;
+      }
+    }
+    return dense.empty();
+  };
+  // Decided once per kGrowthBlock^2 block, at the first pixel asked: a quarter of the cost (the
+  // region's outline gets 2 px coarser, below the final dilation).
+  cv::Mat cache(depth_m.rows / kGrowthBlock + 1, depth_m.cols / kGrowthBlock + 1, CV_8SC1,
+                cv::Scalar(-1));
+  auto may_join = [&](cv::Point q) {
+    std::int8_t& cached = cache.at<std::int8_t>(q.y / kGrowthBlock, q.x / kGrowthBlock);
+    if (cached < 0) cached = static_cast<std::int8_t>(may_join_pixel(q));
+    return cached != 0;
+  };
+  cv::Mat mask = grow_regions(depth_m, seeds, config, may_join);
   if (config.dilation_px > 0 && !seeds.empty()) {
     const int k = 2 * config.dilation_px + 1;
     cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));

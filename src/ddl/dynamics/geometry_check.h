@@ -1,17 +1,25 @@
 #pragma once
 // Multi-view geometry check for dynamic content (DDL-SLAM section III-C, Algorithm 1, after
 // DynaSLAM): keypoints with depth from reference keyframes are projected into the current frame
-// with its low-cost pose; where the projected depth z_proj exceeds the depth measured at that pixel
-// z_meas by more than a threshold, something now stands in front of what the keyframe saw there,
-// so the pixel is marked dynamic. Points whose parallax angle between the two viewing rays exceeds
-// max_parallax_deg are skipped (at wide angles self-occlusion looks like motion). The dynamic seed
-// pixels are then grown into regions over the depth image (flood fill within a depth band around
-// each seed), and the result is combined with the CNN mask by the caller (mask_fusion.h).
+// with its low-cost pose; where the projected depth z_proj exceeds the depth measured around that
+// pixel by more than tau, something now stands in front of what the keyframe saw there. Points
+// whose parallax angle between the two viewing rays exceeds max_parallax_deg are skipped (at wide
+// angles self-occlusion looks like motion). A candidate becomes a seed only when the reference
+// confirms it (back-check): the current measurement, projected into the reference, lies in space
+// the reference saw as empty (its depth image there is farther by more than tau). The seeds are
+// grown into regions over the depth image (flood fill over depth-continuous pixels within a band
+// around the seed's depth) that stops at pixels every reference saw as the same static surface.
+// The result is combined with the CNN mask by the caller (mask_fusion.h). docs/dynamics.md,
+// "Multi-view geometry check", explains the threshold model and the measurements behind it.
 //
-// The threshold grows with depth like the sensor noise (Kinect depth noise grows with z^2, Nguyen
-// et al. 3DIMPVT 2012): tau(z) = depth_threshold_m + depth_threshold_quadratic * z^2.
+// Threshold: tau(z) = depth_threshold_m + depth_threshold_quadratic * z^2, like the Kinect depth
+// noise and disparity quantisation, which both grow with z^2 (Nguyen et al. 3DIMPVT 2012;
+// Khoshelham and Elberink, Sensors 2012). Both depth comparisons look at a (2 r + 1)^2 window
+// (r = window_radius_px) and need all its valid pixels to agree, so a projection a few pixels off
+// at a depth edge (pose error, rounding, edge dropouts) is not taken for motion.
 // Pure functions of their inputs: thread-safe.
 
+#include <functional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -23,38 +31,42 @@ namespace ddl::dynamics {
 struct GeometryCheckConfig {
   int max_reference_keyframes = 5;          // reference keyframes with most overlap (paper: 5)
   double max_parallax_deg = 30.0;           // skip points seen under a wider angle (paper: 30 deg)
-  double depth_threshold_m = 0.08;          // tau at z = 0: constant part of the depth test
-  double depth_threshold_quadratic = 0.02;  // tau grows by this times z^2 (metres per metre^2)
+  double depth_threshold_m = 0.03;          // tau at z = 0: constant part of the depth tests
+  double depth_threshold_quadratic = 0.01;  // tau grows by this times z^2 (metres per metre^2)
   double min_depth_m = 0.3;                 // ignore measurements closer than this
   double max_depth_m = 6.0;                 // and farther than this
   int max_points_per_keyframe = 1000;       // subsample keyframe points beyond this (evenly)
+  int window_radius_px = 4;                 // seed tests: a (2r+1)^2 window must agree (edges)
   int min_seed_support = 1;                 // seeds needed inside a grown region to keep it
   double region_depth_band_m = 0.25;        // flood fill: |depth - seed depth| below this joins
   int region_max_radius_px = 200;           // flood fill stays inside this radius around its seed
   int dilation_px = 2;                      // final dilation of the geometry mask
-  double occluder_agreement_m = 0.05;       // back-check tolerance (+ tau/2), see ReferenceView
+
+  /// tau(z), the depth difference that counts as a change at depth z.
+  double threshold_at(double z) const {
+    return depth_threshold_m + depth_threshold_quadratic * z * z;
+  }
 
   /// Throws ddl::ConfigError naming "dynamics.<field>".
   void validate() const;
 };
 
-/// What a reference keyframe contributes: its pose and its keypoints with valid depth.
+/// What a reference keyframe contributes: its pose, its keypoints with valid depth and, when
+/// available, its depth image.
 struct ReferenceView {
   SE3 T_w_c;                        // keyframe camera -> world
   std::vector<cv::Point2f> pixels;  // undistorted keypoint positions
   std::vector<float> depth_m;       // measured depth at each keypoint (> 0)
-  /// Optional full depth image of the keyframe (CV_32FC1 metres). When present, a candidate is
-  /// checked back: the current measurement at the candidate pixel is projected into the
-  /// reference; if the reference measured that same surface there, the occluder is static
-  /// structure seen from a new viewpoint (occlusion, not motion) and the candidate is dropped.
+  /// Full depth image of the keyframe (CV_32FC1 metres). Without it the reference gives no seeds
+  /// (a candidate cannot be checked back) and says nothing about where regions may grow.
   cv::Mat depth_image_m;
 };
 
 struct GeometryCheckStats {
   int points_tested = 0;
   int points_skipped_parallax = 0;
-  int points_dynamic = 0;
-  int points_rejected_static_occluder = 0;
+  int points_dynamic = 0;                   // seeds
+  int points_rejected_static_occluder = 0;  // candidates the reference did not confirm
 };
 
 /// Dynamic seed pixels and grown regions, CV_8UC1 255 = dynamic, the size of `depth_m`.
@@ -65,8 +77,12 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
                               const GeometryCheckConfig& config,
                               GeometryCheckStats* stats = nullptr);
 
-/// Grows seed pixels (non-zero in `seeds`) into regions of similar depth (see config).
+/// Grows seed pixels into regions of similar depth: 4-neighbours join when their depth is within
+/// tau(z) of the pixel they are reached from and within region_depth_band_m of the seed's, inside
+/// region_max_radius_px of the seed. `may_join(p)`, when given, is asked once per such candidate
+/// and vetoes it (the geometry check passes "not seen as the same static surface by a reference").
 cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds,
-                     const GeometryCheckConfig& config);
+                     const GeometryCheckConfig& config,
+                     const std::function<bool(cv::Point)>& may_join = {});
 
 }  // namespace ddl::dynamics
