@@ -3,17 +3,27 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <unistd.h>
+#endif
+
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
 
 void DenseMapperConfig::validate() const {
   if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
+  if (thread_nice < 0 || thread_nice > 19) {
+    throw ConfigError::for_key("dense.thread_nice", "must be in 0..19");
+  }
   if (mask_border_px < 0 || mask_border_px > 50) {
     throw ConfigError::for_key("dense.mask_border_px", "must be in 0..50");
   }
@@ -49,6 +59,13 @@ void DenseMapper::submit(DenseKeyframe keyframe) {
 }
 
 void DenseMapper::worker() {
+#ifdef __linux__
+  // Per-thread on Linux: the nice value belongs to the thread id, not the process.
+  if (config_.thread_nice != 0 &&
+      setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), config_.thread_nice) != 0) {
+    spdlog::warn("dense mapping: could not lower the thread priority ({})", std::strerror(errno));
+  }
+#endif
   try {
     while (auto item = queue_->pop()) process(std::move(*item));
   } catch (...) {

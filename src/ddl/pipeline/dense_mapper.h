@@ -32,6 +32,9 @@ struct DenseMapperConfig {
   bool octomap_enabled = true;     // build the octree
   bool threaded = false;           // own thread (threaded pipeline mode)
   std::size_t queue_capacity = 8;  // keyframes waiting (threaded)
+  /// Threaded mode on Linux: nice value of the dense thread (0..19), so that on a machine with
+  /// few cores tracking gets the CPU first; the dense work catches up in tracking's idle time.
+  int thread_nice = 10;
   std::string save_inpainted_dir;  // non-empty: write repaired keyframes here
   /// Pixels this close outside a keyframe's dynamic mask (object edges the mask missed) are
   /// neither a background source for later keyframes nor put into the octree.
