@@ -26,6 +26,8 @@ void GeometryCheckConfig::validate() const {
   if (!(region_depth_band_m > 0)) fail("region_depth_band_m", "must be > 0");
   if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
   if (dilation_px < 0) fail("dilation_px", "must be >= 0");
+  if (!(max_seed_fraction > 0 && max_seed_fraction <= 1))
+    fail("max_seed_fraction", "must be in (0, 1]");
 }
 
 cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds,
@@ -227,6 +229,12 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       ++local.points_dynamic;
       seeds.emplace_back(u, v);
     }
+  }
+  const int compared = local.points_tested - local.points_skipped_parallax;
+  if (compared > 0 && local.points_dynamic > config.max_seed_fraction * compared) {
+    local.implausible = true;
+    if (stats != nullptr) *stats = local;
+    return cv::Mat::zeros(depth_m.size(), CV_8UC1);
   }
   // Regions do not grow into pixels that every reference saw as the same surface (the desk
   // around a box put down on it, the floor around a person's feet). One reference that saw

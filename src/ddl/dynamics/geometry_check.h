@@ -41,6 +41,9 @@ struct GeometryCheckConfig {
   double region_depth_band_m = 0.25;        // flood fill: |depth - seed depth| below this joins
   int region_max_radius_px = 200;           // flood fill stays inside this radius around its seed
   int dilation_px = 2;                      // final dilation of the geometry mask
+  /// More seeds than this fraction of the points tested means the pose or the RGB-D registration
+  /// is off (fast motion), not that the scene moved: the frame gets no geometry mask.
+  double max_seed_fraction = 0.05;
 
   /// tau(z), the depth difference that counts as a change at depth z.
   double threshold_at(double z) const {
@@ -67,6 +70,7 @@ struct GeometryCheckStats {
   int points_skipped_parallax = 0;
   int points_dynamic = 0;                   // seeds
   int points_rejected_static_occluder = 0;  // candidates the reference did not confirm
+  bool implausible = false;                 // seeds above max_seed_fraction: no mask for this frame
 };
 
 /// Dynamic seed pixels and grown regions, CV_8UC1 255 = dynamic, the size of `depth_m`.
