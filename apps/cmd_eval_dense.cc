@@ -30,6 +30,8 @@ struct EvalDenseArgs {
   bool no_map = false;
   std::string json_path;
   std::string montage_path;
+  std::string voxels_ply_path;
+  bool align_positions = false;
   int montage_rows = 3;
   int montage_tile_width = 240;
 };
@@ -54,7 +56,9 @@ int run_eval_dense(const EvalDenseArgs& args) {
       inputs.map = eval::MapVoxels{path, voxels.resolution_m, voxels.centres};
     }
   }
-  const eval::DenseEvalResult result = eval::evaluate_dense(inputs, args.options);
+  eval::DenseEvalOptions options = args.options;
+  options.align_with_orientations = !args.align_positions;
+  const eval::DenseEvalResult result = eval::evaluate_dense(inputs, options);
   std::fputs(eval::format_dense_report(result).c_str(), stdout);
   std::fflush(stdout);
   if (!args.json_path.empty()) {
@@ -75,6 +79,14 @@ int run_eval_dense(const EvalDenseArgs& args) {
       throw InputError::at(args.montage_path, "cannot write");
     } else {
       spdlog::info("wrote {}", args.montage_path);
+    }
+  }
+  if (!args.voxels_ply_path.empty()) {
+    if (!result.map) {
+      spdlog::warn("no map evaluated: no classified voxels written");
+    } else {
+      eval::write_classified_voxels_ply(*result.map, args.voxels_ply_path);
+      spdlog::info("wrote {}", args.voxels_ply_path);
     }
   }
   return kOk;
@@ -106,6 +118,9 @@ void add_eval_dense_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--montage", args->montage_path,
                   "Write a PNG of repaired keyframes beside their originals and the true "
                   "background");
+  cmd->add_option("--voxels-ply", args->voxels_ply_path,
+                  "Write the map's voxel centres in the ground-truth frame as a PLY point cloud "
+                  "coloured by class (near static green, ghost red, other blue)");
   cmd->add_option("--montage-rows", args->montage_rows, "Keyframes in the montage")
       ->check(CLI::Range(1, 12))
       ->capture_default_str();
@@ -122,6 +137,9 @@ void add_eval_dense_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--pixel-stride", args->options.pixel_stride,
                   "Reference geometry from every n-th pixel in u and v")
       ->capture_default_str();
+  cmd->add_flag("--align-positions", args->align_positions,
+                "Align the map by positions only, as ATE aligns the trajectory (default: by whole "
+                "poses, which stays determined when the camera hardly moves)");
   cmd->add_option("--radius-voxels", args->options.radius_voxels,
                   "A voxel is near geometry within this many voxel edges")
       ->capture_default_str();

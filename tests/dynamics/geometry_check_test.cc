@@ -174,8 +174,8 @@ TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
 }
 
 // The static room with a grossly wrong pose (3 cm, 2 degrees: what fast motion or an RGB-depth
-// time offset does on real data): seeds all over the image. Without the gate they grow into most
-// of the frame; with it the frame gets no geometry mask.
+// time offset does on real data): seeds all over the image. Without the gate (the default) they
+// grow into most of the frame; with it the frame gets no geometry mask.
 TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
   const auto cam = test_camera();
   const double floor_y = 0.9;
@@ -195,10 +195,62 @@ TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
   ASSERT_GT(stats.points_dynamic, 0.05 * (stats.points_tested - stats.points_skipped_parallax));
   EXPECT_FALSE(stats.implausible);
   EXPECT_GT(cv::countNonZero(flooded), 0.05 * static_cast<double>(flooded.total()));
+  GeometryCheckConfig gated_config;
+  gated_config.max_seed_fraction = 0.05;
   const cv::Mat gated = geometry_dynamic_mask(cur_depth, (T_w_cur * error).inverse(), refs, cam,
-                                              GeometryCheckConfig{}, &stats);
+                                              gated_config, &stats);
   EXPECT_TRUE(stats.implausible);
   EXPECT_EQ(cv::countNonZero(gated), 0);
+}
+
+// Fast rotation on a real sensor: 3 degrees per frame (90 deg/s at 30 fps, as at the peaks of
+// fr1_rpy), and the depth image taken half a frame before the colour image that gave the pose,
+// so depth and pose disagree by 1.5 degrees (14 px) at every depth edge. With fixed 9x9 windows
+// that floods the frame with seeds; windows grown by the image motion since the previous frame
+// (motion_window_gain) absorb it, and a person who walked in front is still found.
+TEST(GeometryCheck, RgbDepthTimeOffsetOnFastMotionIsNotTakenForMotion) {
+  const auto cam = test_camera();
+  const double floor_y = 0.9;
+  const std::vector<Box> furniture = {{-0.7, 0.3, 0.15, 0.9, 2.2}, {0.6, 1.3, -0.6, 0.9, 2.9}};
+  const SE3 T_w_ref;
+  const cv::Mat ref_depth = noisy_depth(cam, T_w_ref, 3.5, furniture, floor_y, 3);
+  const std::vector<ReferenceView> refs = {reference_from(cam, T_w_ref, ref_depth, 1000, 7)};
+  const Vec3d axis = Vec3d(0.2, 1.0, 0.3).normalized();
+  auto rotated = [&](double deg) {
+    return SE3(Mat3d(Eigen::AngleAxisd(deg * M_PI / 180.0, axis)), Vec3d(0.04, 0.0, 0.05));
+  };
+  const SE3 T_w_cur = rotated(7.5);       // the colour image's pose
+  const SE3 T_w_depth = rotated(6.0);     // where the depth image was taken
+  const SE3 T_w_previous = rotated(4.5);  // the previous frame
+  GeometryCheckConfig fixed_window;
+  fixed_window.motion_window_gain = 0.0;
+  fixed_window.max_seed_fraction = 1.0;
+  GeometryCheckConfig config;  // defaults: motion-grown windows
+  config.max_seed_fraction = 1.0;
+
+  const cv::Mat static_depth = noisy_depth(cam, T_w_depth, 3.5, furniture, floor_y, 4);
+  GeometryCheckStats fixed_stats;
+  const cv::Mat flooded = geometry_dynamic_mask(static_depth, T_w_cur.inverse(), refs, cam,
+                                                fixed_window, &fixed_stats, T_w_previous.inverse());
+  EXPECT_GT(cv::countNonZero(flooded), 0.01 * static_cast<double>(flooded.total()))
+      << "seeds " << fixed_stats.points_dynamic;
+  GeometryCheckStats stats;
+  const cv::Mat mask = geometry_dynamic_mask(static_depth, T_w_cur.inverse(), refs, cam, config,
+                                             &stats, T_w_previous.inverse());
+  EXPECT_GT(stats.median_motion_px, 10.0);
+  EXPECT_LT(cv::countNonZero(mask), 0.002 * static_cast<double>(mask.total()))
+      << "seeds " << stats.points_dynamic;
+
+  std::vector<Box> with_person = furniture;
+  with_person.push_back({-0.2, 0.25, -0.8, floor_y, 1.6});
+  const cv::Mat person_depth = noisy_depth(cam, T_w_depth, 3.5, with_person, floor_y, 5);
+  const cv::Mat truth = truth_mask(render_depth(cam, T_w_depth, 3.5, with_person, floor_y),
+                                   render_depth(cam, T_w_depth, 3.5, furniture, floor_y));
+  const cv::Mat found = geometry_dynamic_mask(person_depth, T_w_cur.inverse(), refs, cam, config,
+                                              &stats, T_w_previous.inverse());
+  const MaskScore score = score_mask(found, truth);
+  EXPECT_GT(score.recall, 0.8) << "precision " << score.precision;
+  EXPECT_GT(score.precision, 0.8) << "recall " << score.recall;
 }
 
 // A person steps in front of the camera and stands on the floor: the region grown from the seeds

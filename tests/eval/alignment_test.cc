@@ -66,5 +66,37 @@ TEST(AlignmentTest, RejectsMismatchedOrEmptyInput) {
   EXPECT_THROW(align_umeyama(same, same, true), Error);
 }
 
+// A camera on a tripod: positions within +-1 mm, orientations within a few degrees, with 1 mm /
+// 0.1 degree estimation noise. The position-only fit cannot determine the rotation; the pose
+// fit recovers it to well below a degree.
+TEST(AlignmentTest, PoseAlignmentStaysDeterminedForACameraThatHardlyMoves) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const SE3 T_gt_est(so3_exp(Vec3d(0.4, -0.9, 1.7)), Vec3d(2.0, 1.0, 1.4));
+  std::vector<SE3> gt;
+  std::vector<SE3> est;
+  Eigen::Matrix3Xd gt_xyz(3, 100);
+  Eigen::Matrix3Xd est_xyz(3, 100);
+  for (int i = 0; i < 100; ++i) {
+    const SE3 T_est_w_c(so3_exp(0.05 * Vec3d(noise(rng), noise(rng), noise(rng))),
+                        0.001 * Vec3d(noise(rng), noise(rng), noise(rng)));
+    const SE3 error(so3_exp(0.0017 * Vec3d(noise(rng), noise(rng), noise(rng))),
+                    0.001 * Vec3d(noise(rng), noise(rng), noise(rng)));
+    est.push_back(T_est_w_c);
+    gt.push_back(T_gt_est * T_est_w_c * error);
+    est_xyz.col(i) = est.back().translation();
+    gt_xyz.col(i) = gt.back().translation();
+  }
+  auto angle_deg = [](const Mat3d& a, const Mat3d& b) {
+    return so3_log(a * b.transpose()).norm() * 180.0 / M_PI;
+  };
+  const Alignment poses = align_poses(gt, est);
+  EXPECT_LT(angle_deg(poses.R_gt_est, T_gt_est.rotation()), 0.1);
+  EXPECT_LT((poses.t_gt_est - T_gt_est.translation()).norm(), 0.002);
+  const Alignment positions = align_horn(est_xyz, gt_xyz);
+  EXPECT_GT(angle_deg(positions.R_gt_est, T_gt_est.rotation()), 5.0);
+  EXPECT_THROW(align_poses(gt, {}), Error);
+}
+
 }  // namespace
 }  // namespace ddl::eval

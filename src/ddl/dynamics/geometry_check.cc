@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -22,6 +23,10 @@ void GeometryCheckConfig::validate() const {
     fail("max_depth_m", "must exceed min_depth_m");
   if (max_points_per_keyframe < 1) fail("max_points_per_keyframe", "must be >= 1");
   if (window_radius_px < 0 || window_radius_px > 10) fail("window_radius_px", "must be in 0..10");
+  if (!(motion_window_gain >= 0 && motion_window_gain <= 4))
+    fail("motion_window_gain", "must be in [0, 4]");
+  if (max_window_radius_px < window_radius_px || max_window_radius_px > 64)
+    fail("max_window_radius_px", "must be in window_radius_px..64");
   if (min_seed_support < 1) fail("min_seed_support", "must be >= 1");
   if (!(region_depth_band_m > 0)) fail("region_depth_band_m", "must be > 0");
   if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
@@ -99,6 +104,20 @@ constexpr int kGrowthBlock = 2;
 
 enum class Evidence { kNone, kStatic, kMoved };
 
+// Windows up to this radius are read in full; wider ones on a (2 kFullWindowRadius + 1)^2 grid.
+constexpr int kFullWindowRadius = 4;
+
+// Sample step along each axis of a window of radius r.
+int window_step(int r) {
+  return r <= kFullWindowRadius ? 1 : (r + kFullWindowRadius - 1) / kFullWindowRadius;
+}
+
+// Number of samples of a window of radius r.
+int window_samples(int r) {
+  const int per_axis = 2 * (r / window_step(r)) + 1;
+  return per_axis * per_axis;
+}
+
 // A reference with a depth image, prepared for dense look-ups from current pixels:
 // p_ref = z * (A * [u v 1]) + t with A = R_ref_cur * K^-1, t = the current camera centre in the
 // reference frame.
@@ -129,11 +148,13 @@ Evidence reference_evidence(const Reference& ref, double u, double v, double z,
   if (uc - r < 0 || vc - r < 0 || uc + r >= d.cols || vc + r >= d.rows) return Evidence::kNone;
   const float zp = static_cast<float>(p.z());
   const float tau = static_cast<float>(config.threshold_at(p.z()));
+  const int step = window_step(r);
+  const int reach = (r / step) * step;
   int valid = 0;
   bool all_behind = true;
-  for (int y = vc - r; y <= vc + r; ++y) {
+  for (int y = vc - reach; y <= vc + reach; y += step) {
     const float* row = d.ptr<float>(y);
-    for (int x = uc - r; x <= uc + r; ++x) {
+    for (int x = uc - reach; x <= uc + reach; x += step) {
       const float zr = row[x];
       if (zr <= 0.0f) continue;
       ++valid;
@@ -141,8 +162,7 @@ Evidence reference_evidence(const Reference& ref, double u, double v, double z,
       if (zr <= zp + tau) all_behind = false;
     }
   }
-  const int window = (2 * r + 1) * (2 * r + 1);
-  return all_behind && 2 * valid >= window ? Evidence::kMoved : Evidence::kNone;
+  return all_behind && 2 * valid >= window_samples(r) ? Evidence::kMoved : Evidence::kNone;
 }
 
 // True when every valid current pixel of the window around (u, v) - at least half of them - is
@@ -150,16 +170,18 @@ Evidence reference_evidence(const Reference& ref, double u, double v, double z,
 bool hidden_in_current(const cv::Mat& depth_m, int uc, int vc, double z_proj, double tau, int r) {
   if (uc - r < 0 || vc - r < 0 || uc + r >= depth_m.cols || vc + r >= depth_m.rows) return false;
   const float limit = static_cast<float>(z_proj - tau);
+  const int step = window_step(r);
+  const int reach = (r / step) * step;
   int valid = 0;
-  for (int v = vc - r; v <= vc + r; ++v) {
+  for (int v = vc - reach; v <= vc + reach; v += step) {
     const float* row = depth_m.ptr<float>(v);
-    for (int u = uc - r; u <= uc + r; ++u) {
+    for (int u = uc - reach; u <= uc + reach; u += step) {
       if (row[u] <= 0.0f) continue;
       if (row[u] >= limit) return false;
       ++valid;
     }
   }
-  return 2 * valid >= (2 * r + 1) * (2 * r + 1);
+  return 2 * valid >= window_samples(r);
 }
 
 }  // namespace
@@ -167,7 +189,8 @@ bool hidden_in_current(const cv::Mat& depth_m, int uc, int vc, double z_proj, do
 cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
                               const std::vector<ReferenceView>& references,
                               const camera::PinholeCamera& camera,
-                              const GeometryCheckConfig& config, GeometryCheckStats* stats) {
+                              const GeometryCheckConfig& config, GeometryCheckStats* stats,
+                              const std::optional<SE3>& T_c_w_previous) {
   if (depth_m.type() != CV_32FC1) throw Error("geometry check: depth must be CV_32FC1 metres");
   GeometryCheckStats local;
   const double cos_max_parallax = std::cos(config.max_parallax_deg * M_PI / 180.0);
@@ -188,12 +211,15 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
     dense.push_back({&view, T_ref_cur.rotation() * K_inv, T_ref_cur.translation()});
   }
   std::vector<cv::Point> seeds;
+  std::vector<float> motion_px;  // image motion of the tested points since the previous frame
   for (const Reference& ref : dense) {
     const ReferenceView& view = *ref.view;
     const std::size_t n = view.pixels.size();
     const std::size_t step =
         std::max<std::size_t>(1, n / static_cast<std::size_t>(config.max_points_per_keyframe));
     const SE3 T_cur_ref = T_c_w * view.T_w_c;
+    const std::optional<SE3> T_prev_ref =
+        T_c_w_previous ? std::optional<SE3>(*T_c_w_previous * view.T_w_c) : std::nullopt;
     for (std::size_t i = 0; i < n; i += step) {
       const double z_ref = view.depth_m[i];
       if (z_ref < config.min_depth_m || z_ref > config.max_depth_m) continue;
@@ -216,19 +242,31 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       const float z_meas = depth_m.at<float>(v, u);
       if (z_meas < config.min_depth_m || z_meas > config.max_depth_m) continue;
       const double z_proj = p_cur.z();
-      if (!hidden_in_current(depth_m, u, v, z_proj, config.threshold_at(z_proj),
-                             config.window_radius_px)) {
-        continue;
+      int r = config.window_radius_px;
+      if (T_prev_ref) {
+        const Vec3d p_prev = *T_prev_ref * p_ref;
+        if (p_prev.z() > config.min_depth_m) {
+          const double motion = (camera.project(p_prev) - uv).norm();
+          motion_px.push_back(static_cast<float>(motion));
+          r = std::min(config.max_window_radius_px,
+                       r + static_cast<int>(std::ceil(config.motion_window_gain * motion)));
+        }
       }
+      if (!hidden_in_current(depth_m, u, v, z_proj, config.threshold_at(z_proj), r)) continue;
       // Back-check: did the reference see through what hides its point now?
-      if (reference_evidence(ref, u, v, z_meas, camera, config, cos_max_parallax,
-                             config.window_radius_px) != Evidence::kMoved) {
+      if (reference_evidence(ref, u, v, z_meas, camera, config, cos_max_parallax, r) !=
+          Evidence::kMoved) {
         ++local.points_rejected_static_occluder;
         continue;
       }
       ++local.points_dynamic;
       seeds.emplace_back(u, v);
     }
+  }
+  if (!motion_px.empty()) {
+    auto mid = motion_px.begin() + static_cast<std::ptrdiff_t>(motion_px.size() / 2);
+    std::nth_element(motion_px.begin(), mid, motion_px.end());
+    local.median_motion_px = *mid;
   }
   const int compared = local.points_tested - local.points_skipped_parallax;
   if (compared > 0 && local.points_dynamic > config.max_seed_fraction * compared) {

@@ -16,11 +16,15 @@
 // noise and disparity quantisation, which both grow with z^2 (Nguyen et al. 3DIMPVT 2012;
 // Khoshelham and Elberink, Sensors 2012). Both depth comparisons look at a (2 r + 1)^2 window
 // (r = window_radius_px) and need all its valid pixels to agree, so a projection a few pixels off
-// at a depth edge (pose error, rounding, edge dropouts) is not taken for motion.
+// at a depth edge (pose error, rounding, edge dropouts) is not taken for motion. On fast motion
+// the window grows with the point's image motion since the previous frame (motion_window_gain),
+// which absorbs the RGB-depth time offset and rolling shutter of real sensors; windows wider than
+// 9x9 are sampled on a 9x9 grid.
 // Pure functions of their inputs: thread-safe.
 
 #include <functional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
@@ -37,13 +41,20 @@ struct GeometryCheckConfig {
   double max_depth_m = 6.0;                 // and farther than this
   int max_points_per_keyframe = 1000;       // subsample keyframe points beyond this (evenly)
   int window_radius_px = 4;                 // seed tests: a (2r+1)^2 window must agree (edges)
-  int min_seed_support = 1;                 // seeds needed inside a grown region to keep it
-  double region_depth_band_m = 0.25;        // flood fill: |depth - seed depth| below this joins
-  int region_max_radius_px = 200;           // flood fill stays inside this radius around its seed
-  int dilation_px = 2;                      // final dilation of the geometry mask
-  /// More seeds than this fraction of the points tested means the pose or the RGB-D registration
-  /// is off (fast motion), not that the scene moved: the frame gets no geometry mask.
-  double max_seed_fraction = 0.05;
+  /// Seed windows grow by this times the point's image motion since the previous frame: the
+  /// depth image is taken up to half a frame apart from the colour image that gave the pose
+  /// (TUM: up to 20 ms) and rows are exposed one after another (rolling shutter), so on fast
+  /// motion depth and pose disagree by a share of that motion at every depth edge.
+  double motion_window_gain = 0.5;
+  int max_window_radius_px = 24;      // cap of the motion-grown seed window
+  int min_seed_support = 1;           // seeds needed inside a grown region to keep it
+  double region_depth_band_m = 0.25;  // flood fill: |depth - seed depth| below this joins
+  int region_max_radius_px = 200;     // flood fill stays inside this radius around its seed
+  int dilation_px = 2;                // final dilation of the geometry mask
+  /// Safety net: more seeds than this fraction of the points tested is taken for a bad pose, and
+  /// the frame gets no geometry mask. 1 = off (default: with motion-grown windows real fast
+  /// motion stays below 5%, while people near the camera hide up to 2/3 of the points).
+  double max_seed_fraction = 1.0;
 
   /// tau(z), the depth difference that counts as a change at depth z.
   double threshold_at(double z) const {
@@ -71,15 +82,19 @@ struct GeometryCheckStats {
   int points_dynamic = 0;                   // seeds
   int points_rejected_static_occluder = 0;  // candidates the reference did not confirm
   bool implausible = false;                 // seeds above max_seed_fraction: no mask for this frame
+  double median_motion_px = 0.0;            // median image motion of the tested points
 };
 
 /// Dynamic seed pixels and grown regions, CV_8UC1 255 = dynamic, the size of `depth_m`.
-/// `depth_m`: current frame depth (CV_32FC1, metres, 0 = none); `T_c_w`: its pose estimate.
+/// `depth_m`: current frame depth (CV_32FC1, metres, 0 = none); `T_c_w`: its pose estimate;
+/// `T_c_w_previous`: the previous frame's pose, when known, which sizes the seed windows
+/// (motion_window_gain).
 cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
                               const std::vector<ReferenceView>& references,
                               const camera::PinholeCamera& camera,
                               const GeometryCheckConfig& config,
-                              GeometryCheckStats* stats = nullptr);
+                              GeometryCheckStats* stats = nullptr,
+                              const std::optional<SE3>& T_c_w_previous = std::nullopt);
 
 /// Grows seed pixels into regions of similar depth: 4-neighbours join when their depth is within
 /// tau(z) of the pixel they are reached from and within region_depth_band_m of the seed's, inside

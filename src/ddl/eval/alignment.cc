@@ -48,4 +48,27 @@ Alignment align_horn(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data
   return align_umeyama(model, data, /*with_scale=*/false);
 }
 
+Alignment align_poses(const std::vector<SE3>& T_gt_w_c, const std::vector<SE3>& T_est_w_c) {
+  if (T_gt_w_c.size() != T_est_w_c.size()) {
+    throw Error(fmt::format("alignment: {} ground-truth poses but {} estimated poses",
+                            T_gt_w_c.size(), T_est_w_c.size()));
+  }
+  if (T_gt_w_c.empty()) throw Error("alignment: no poses to align");
+  Mat3d M = Mat3d::Zero();
+  for (std::size_t i = 0; i < T_gt_w_c.size(); ++i) {
+    M += T_gt_w_c[i].rotation() * T_est_w_c[i].rotation().transpose();
+  }
+  const Eigen::JacobiSVD<Mat3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3d S = Mat3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) S(2, 2) = -1.0;
+  Alignment out;
+  out.R_gt_est = svd.matrixU() * S * svd.matrixV().transpose();
+  Vec3d t = Vec3d::Zero();
+  for (std::size_t i = 0; i < T_gt_w_c.size(); ++i) {
+    t += T_gt_w_c[i].translation() - out.R_gt_est * T_est_w_c[i].translation();
+  }
+  out.t_gt_est = t / static_cast<double>(T_gt_w_c.size());
+  return out;
+}
+
 }  // namespace ddl::eval

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "ddl/core/se3.h"
 #include "ddl/core/types.h"
 
 namespace ddl::eval {
@@ -33,5 +34,12 @@ Alignment align_horn(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data
 /// differ, there are no points, or (with scale) all model points coincide.
 Alignment align_umeyama(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data,
                         bool with_scale = true);
+
+/// Rigid alignment from corresponding poses, orientations included: R = the rotation nearest
+/// (polar decomposition) to sum_i R_gt_i R_est_i^T, t = mean_i (t_gt_i - R t_est_i). Unlike the
+/// position-only fit it stays determined when the camera hardly moves (a camera on a tripod
+/// whose positions span millimetres leaves the rotation of align_horn to noise). Throws
+/// ddl::Error if the sizes differ or there are no poses.
+Alignment align_poses(const std::vector<SE3>& T_gt_w_c, const std::vector<SE3>& T_est_w_c);
 
 }  // namespace ddl::eval

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
@@ -241,6 +242,25 @@ MapEvaluation evaluate_map(const TruthSequence& truth, const DenseEvalOptions& o
   const AteResult ate = compute_ate(truth.groundtruth(), estimate, ate_options);
   m.alignment_rmse_m = ate.stats_m.rmse;
   m.alignment_pairs = ate.errors_m.size();
+  Alignment alignment = ate.alignment;
+  if (options.align_with_orientations) {
+    // The same associated pairs, aligned as whole poses (orientations included).
+    std::map<double, SE3> gt_by_stamp;
+    for (const io::StampedPose& p : truth.groundtruth())
+      gt_by_stamp.emplace(p.timestamp_s, p.T_w_c());
+    std::map<double, SE3> est_by_stamp;
+    for (const io::StampedPose& p : estimate) est_by_stamp.emplace(p.timestamp_s, p.T_w_c());
+    std::vector<SE3> gt_poses;
+    std::vector<SE3> est_poses;
+    for (std::size_t i = 0; i < ate.stamps_gt_s.size(); ++i) {
+      const auto g = gt_by_stamp.find(ate.stamps_gt_s[i]);
+      const auto e = est_by_stamp.find(ate.stamps_est_s[i]);
+      if (g == gt_by_stamp.end() || e == est_by_stamp.end()) continue;
+      gt_poses.push_back(g->second);
+      est_poses.push_back(e->second);
+    }
+    alignment = align_poses(gt_poses, est_poses);
+  }
 
   // Reference clouds over the frames the run processed: every frame_stride-th frame of the
   // estimate's time span, and every repaired keyframe (whose dynamic content could have been
@@ -281,8 +301,9 @@ MapEvaluation evaluate_map(const TruthSequence& truth, const DenseEvalOptions& o
 
   std::vector<Vec3d> centres_gt;
   centres_gt.reserve(voxels.centres.size());
-  for (const Vec3d& c : voxels.centres) centres_gt.push_back(ate.alignment.apply(c));
-  m.voxels = classify_voxels(centres_gt, static_points, dynamic_points, m.radius_m);
+  for (const Vec3d& c : voxels.centres) centres_gt.push_back(alignment.apply(c));
+  m.voxels = classify_voxels(centres_gt, static_points, dynamic_points, m.radius_m, &m.labels);
+  m.centres_gt = std::move(centres_gt);
   return m;
 }
 
@@ -338,15 +359,16 @@ std::string format_dense_report(const DenseEvalResult& r) {
     const MapEvaluation& m = *r.map;
     const VoxelClasses& v = m.voxels;
     out += fmt::format(
-        "map {} ({:.3f} m voxels, near = {:.3f} m; aligned by ATE, RMSE {:.4f} m over {} "
-        "poses):\n"
+        "map {} ({:.3f} m voxels, near = {:.3f} m; aligned by {} over {} poses, ATE RMSE "
+        "{:.4f} m):\n"
         "  occupied voxels          {}\n"
         "  near static geometry     {} ({:.2f}%)\n"
         "  ghost (only dynamic)     {} ({:.2f}%)\n"
         "  other                    {} ({:.2f}%)\n",
-        m.path, m.resolution_m, m.radius_m, m.alignment_rmse_m, m.alignment_pairs, v.occupied,
-        v.true_static, 100.0 * v.fraction(v.true_static), v.ghost, 100.0 * v.fraction(v.ghost),
-        v.other, 100.0 * v.fraction(v.other));
+        m.path, m.resolution_m, m.radius_m,
+        r.options.align_with_orientations ? "whole poses" : "positions (as ATE)", m.alignment_pairs,
+        m.alignment_rmse_m, v.occupied, v.true_static, 100.0 * v.fraction(v.true_static), v.ghost,
+        100.0 * v.fraction(v.ghost), v.other, 100.0 * v.fraction(v.other));
   }
   return out;
 }
@@ -408,6 +430,7 @@ nlohmann::json to_json(const DenseEvalResult& r) {
                 {"reference_frames", m.reference_frames},
                 {"static_points", m.static_points},
                 {"dynamic_points", m.dynamic_points},
+                {"alignment", r.options.align_with_orientations ? "poses" : "positions"},
                 {"alignment_ate_rmse_m", m.alignment_rmse_m},
                 {"alignment_pairs", m.alignment_pairs}};
   }
@@ -471,6 +494,31 @@ cv::Mat inpainting_montage(const DenseEvalResult& result, int rows, int tile_wid
                 cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   return montage;
+}
+
+}  // namespace ddl::eval
+
+namespace ddl::eval {
+
+void write_classified_voxels_ply(const MapEvaluation& map, const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (file == nullptr) throw InputError::at(path, "cannot open for writing");
+  fmt::print(file,
+             "ply\nformat ascii 1.0\ncomment DDL-SLAM eval-dense: near static green, ghost red, "
+             "other blue; ground-truth frame\nelement vertex {}\nproperty float x\nproperty "
+             "float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty "
+             "uchar blue\nend_header\n",
+             map.centres_gt.size());
+  for (std::size_t i = 0; i < map.centres_gt.size(); ++i) {
+    const Vec3d& p = map.centres_gt[i];
+    const VoxelClass c = i < map.labels.size() ? map.labels[i] : VoxelClass::kOther;
+    const char* rgb = c == VoxelClass::kStatic  ? "0 200 0"
+                      : c == VoxelClass::kGhost ? "220 0 0"
+                                                : "0 0 220";
+    fmt::print(file, "{:.4f} {:.4f} {:.4f} {}\n", p.x(), p.y(), p.z(), rgb);
+  }
+  const bool ok = std::fclose(file) == 0;
+  if (!ok) throw InputError::at(path, "write failed");
 }
 
 }  // namespace ddl::eval

@@ -40,6 +40,9 @@ struct DenseEvalOptions {
   int pixel_stride = 2;                 // reference clouds: every n-th pixel in u and v
   double radius_voxels = 2.0;           // "near" = within this many voxel edges
   double max_difference_s = 0.02;       // association of stamps with groundtruth.txt
+  /// Map alignment: true = whole poses (align_poses, orientations included; well determined
+  /// even for a camera that hardly moves), false = positions only, as ATE aligns.
+  bool align_with_orientations = true;
 
   /// Throws ddl::ConfigError naming the option.
   void validate() const;
@@ -61,7 +64,13 @@ struct MapEvaluation {
   std::size_t dynamic_points = 0;
   double alignment_rmse_m = 0.0;  // ATE RMSE of the alignment used
   std::size_t alignment_pairs = 0;
+  std::vector<Vec3d> centres_gt;   // occupied voxel centres in the ground-truth frame
+  std::vector<VoxelClass> labels;  // their classes, in the same order
 };
+
+/// Writes the classified voxel centres as an ASCII PLY point cloud in the ground-truth frame:
+/// near static green, ghost red, other blue. Throws ddl::IoError naming the file.
+void write_classified_voxels_ply(const MapEvaluation& map, const std::string& path);
 
 struct DenseEvalResult {
   DenseEvalInputs inputs;  // without the voxels

@@ -226,17 +226,23 @@ bool PointGrid::any_within(const Vec3d& q, double radius_m) const {
 }
 
 VoxelClasses classify_voxels(const std::vector<Vec3d>& centres, const PointGrid& static_points,
-                             const PointGrid& dynamic_points, double radius_m) {
+                             const PointGrid& dynamic_points, double radius_m,
+                             std::vector<VoxelClass>* labels) {
   VoxelClasses c;
   c.occupied = centres.size();
+  if (labels != nullptr) labels->clear();
   for (const Vec3d& p : centres) {
+    VoxelClass label = VoxelClass::kOther;
     if (static_points.any_within(p, radius_m)) {
       ++c.true_static;
+      label = VoxelClass::kStatic;
     } else if (dynamic_points.any_within(p, radius_m)) {
       ++c.ghost;
+      label = VoxelClass::kGhost;
     } else {
       ++c.other;
     }
+    if (labels != nullptr) labels->push_back(label);
   }
   return c;
 }

@@ -131,8 +131,12 @@ struct VoxelClasses {
   }
 };
 
-/// Classifies voxel centres (already in the ground-truth frame).
+enum class VoxelClass : std::uint8_t { kStatic, kGhost, kOther };
+
+/// Classifies voxel centres (already in the ground-truth frame); `labels`, when given, receives
+/// the class of each centre.
 VoxelClasses classify_voxels(const std::vector<Vec3d>& centres, const PointGrid& static_points,
-                             const PointGrid& dynamic_points, double radius_m);
+                             const PointGrid& dynamic_points, double radius_m,
+                             std::vector<VoxelClass>* labels = nullptr);
 
 }  // namespace ddl::eval

@@ -68,7 +68,8 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
 
 cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                                        const std::vector<map::KeyFramePtr>& references,
-                                       dynamics::GeometryCheckStats* stats) {
+                                       dynamics::GeometryCheckStats* stats,
+                                       const std::optional<SE3>& T_c_w_previous) {
   if (!config_.enabled || !config_.use_geometry || references.empty()) return {};
   std::vector<dynamics::ReferenceView> views;
   for (const map::KeyFramePtr& kf : references) {
@@ -89,7 +90,7 @@ cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_
     views.push_back(std::move(view));
   }
   return dynamics::geometry_dynamic_mask(frame.depth_m, T_c_w, views, camera_, config_.geometry,
-                                         stats);
+                                         stats, T_c_w_previous);
 }
 
 cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {

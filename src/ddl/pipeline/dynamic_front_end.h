@@ -57,10 +57,12 @@ class DynamicFrontEnd {
   /// dynamic.segmentation_interval > 1 most frames reuse the last inferred mask, grown.
   CnnMask cnn_mask(const io::RgbdFrame& frame);
 
-  /// Geometry mask at pose T_c_w against `references` (best overlap first).
+  /// Geometry mask at pose T_c_w against `references` (best overlap first); the previous
+  /// frame's pose, when known, sizes the seed windows to the camera motion.
   cv::Mat geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                         const std::vector<map::KeyFramePtr>& references,
-                        dynamics::GeometryCheckStats* stats);
+                        dynamics::GeometryCheckStats* stats,
+                        const std::optional<SE3>& T_c_w_previous = std::nullopt);
 
   /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
   cv::Mat exclusion_mask(const cv::Mat& mask) const;

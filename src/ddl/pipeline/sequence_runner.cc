@@ -48,6 +48,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"map_resets", s.map_resets},
           {"geometry_checks_low_cost", s.geometry_checks_low_cost},
           {"geometry_checks_predicted", s.geometry_checks_predicted},
+          {"geometry_checks_implausible", s.geometry_checks_implausible},
           {"dense",
            {{"keyframes", s.dense.keyframes},
             {"masked_pixels", s.dense.masked_pixels},

@@ -111,7 +111,13 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
            static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
     references.push_back(std::move(kf));
   }
-  masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats);
+  masks.geometry =
+      dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);
+  const dynamics::GeometryCheckStats& g = masks.geometry_stats;
+  if (g.implausible) ++stats_.geometry_checks_implausible;
+  spdlog::debug("frame {}: geometry check tested {} points, {} seeds, motion {:.1f} px{}",
+                frame.index, g.points_tested - g.points_skipped_parallax, g.points_dynamic,
+                g.median_motion_px, g.implausible ? " (implausible: no mask)" : "");
   cv::Mat exclusion = dynamic_->exclusion_mask(masks.geometry);
   masks.geometry_ms = geometry_watch.elapsed_ms();
   timings_.record("geometry_check", masks.geometry_ms);

@@ -62,6 +62,7 @@ struct SystemStatistics {
   std::size_t map_resets = 0;
   std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose
   std::size_t geometry_checks_predicted = 0;  // ... at the constant-velocity prediction (fallback)
+  std::size_t geometry_checks_implausible = 0;  // ... whose mask the seed-fraction gate dropped
   DenseStats dense;
 };
 
