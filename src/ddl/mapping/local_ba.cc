@@ -10,7 +10,8 @@ namespace ddl::mapping {
 LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, map::Map& map,
                                               const CameraIntrinsics& camera,
                                               const optimization::OptimizerConfig& config,
-                                              const std::atomic<bool>* abort) {
+                                              const std::atomic<bool>* abort,
+                                              std::size_t max_free_keyframes) {
   LocalBaStatistics stats;
   if (abort != nullptr && abort->load(std::memory_order_acquire)) {
     stats.aborted = true;
@@ -20,7 +21,10 @@ LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, m
   // Local keyframes (free): the current one and its covisibles; keyed by id for a fixed order.
   std::map<map::KeyFrameId, map::KeyFramePtr> local;
   local[current->id()] = current;
-  for (const map::KeyFramePtr& kf : current->covisibles()) {
+  const std::vector<map::KeyFramePtr> covisibles =
+      max_free_keyframes > 0 ? current->best_covisibles(max_free_keyframes - 1)
+                             : current->covisibles();
+  for (const map::KeyFramePtr& kf : covisibles) {
     if (!kf->is_bad()) local[kf->id()] = kf;
   }
   // Local points: everything the local keyframes see.

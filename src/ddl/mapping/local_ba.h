@@ -31,10 +31,12 @@ struct LocalBaStatistics {
 };
 
 /// Runs local BA around `current`. `abort` (may be null) is polled by the solver after every
-/// iteration; when it is already set on entry nothing runs.
+/// iteration; when it is already set on entry nothing runs. `max_free_keyframes` > 0 frees only
+/// `current` and its strongest covisibles up to that many keyframes in all.
 LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, map::Map& map,
                                               const CameraIntrinsics& camera,
                                               const optimization::OptimizerConfig& config,
-                                              const std::atomic<bool>* abort = nullptr);
+                                              const std::atomic<bool>* abort = nullptr,
+                                              std::size_t max_free_keyframes = 0);
 
 }  // namespace ddl::mapping

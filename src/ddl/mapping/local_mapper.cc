@@ -163,7 +163,8 @@ map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
     watch.reset();
     if (config_.local_ba &&
         map_->keyframe_count() >= static_cast<std::size_t>(config_.local_ba_min_keyframes)) {
-      ba = run_local_bundle_adjustment(keyframe, *map_, camera_, config_.optimizer, abort);
+      ba = run_local_bundle_adjustment(keyframe, *map_, camera_, config_.optimizer, abort,
+                                       static_cast<std::size_t>(config_.local_ba_max_keyframes));
     }
     timings.local_ba_ms = watch.elapsed_ms();
     watch.reset();

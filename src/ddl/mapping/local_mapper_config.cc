@@ -77,6 +77,7 @@ void LocalMapperConfig::validate() const {
   require_int(keyframe_culling.min_other_observers, 1, 1000, k + "min_other_observers");
 
   require_int(local_ba_min_keyframes, 2, 1000000, "mapping.local_ba_min_keyframes");
+  require_int(local_ba_max_keyframes, 0, 1000000, "mapping.local_ba_max_keyframes");
   try {
     optimizer.validate();
   } catch (const ConfigError& e) {

@@ -58,8 +58,13 @@ struct LocalMapperConfig {
   FusionConfig fusion;
   PointCullingConfig point_culling;
   KeyFrameCullingConfig keyframe_culling;
-  bool local_ba = true;                     // run local bundle adjustment
-  int local_ba_min_keyframes = 3;           // ... once the map has at least this many keyframes
+  bool local_ba = true;            // run local bundle adjustment
+  int local_ba_min_keyframes = 3;  // ... once the map has at least this many keyframes
+  /// Free keyframes of a local BA at most: the new keyframe and its strongest covisibles (the
+  /// rest that see local points stay fixed). ORB-SLAM2 frees every covisible keyframe; when the
+  /// map degenerates (a keyframe on every frame, all seeing the same points) that grows without
+  /// bound. Real sequences stay below it (fr1_rpy: at most 54). 0 = no limit.
+  int local_ba_max_keyframes = 60;
   optimization::OptimizerConfig optimizer;  // local BA schedule (local_ba, chi2_*, threads)
 
   /// Throws ddl::ConfigError naming the key ("mapping.triangulation.neighbours", ...).
