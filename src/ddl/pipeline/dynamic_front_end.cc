@@ -53,13 +53,17 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
   const bool reuse =
       last_cnn_index_ && frame.index > *last_cnn_index_ &&
       frame.index - *last_cnn_index_ < static_cast<std::size_t>(config_.segmentation_interval);
+  // last_cnn_mask_ never shares its buffer with a published mask, which goes on to tracking and
+  // the dense thread: OpenCV's reference counts (inside libopencv_core) are invisible to
+  // ThreadSanitizer, so a shared buffer freed here after they read it shows up as a race.
   if (reuse) {
     out.mask =
         dynamics::feature_exclusion_mask(last_cnn_mask_, config_.segmentation_reuse_dilation_px);
+    if (out.mask.data == last_cnn_mask_.data) out.mask = last_cnn_mask_.clone();  // no growth
     out.reused = true;
   } else {
     out.mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
-    last_cnn_mask_ = out.mask;
+    last_cnn_mask_ = out.mask.clone();
     last_cnn_index_ = frame.index;
   }
   out.elapsed_ms = watch.elapsed_ms();
