@@ -143,6 +143,41 @@ TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
   EXPECT_GT(red_pixels(unchecked), 500);
 }
 
+// The newest keyframe's own repair let a remnant through (red, 2 m: behind the current person,
+// so the free-space check cannot reject it); an older keyframe observed the wall there. What was
+// observed wins, so one repair's mistake is not copied into the next.
+TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
+  const auto cam = test_camera();
+  const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
+  const SE3 T_w_older(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0));
+  const SE3 T_w_cur;
+  View newest = render(cam, T_w_newest, false);
+  const cv::Rect remnant(200, 200, 40, 40);  // projects into the person's pixels below
+  newest.depth(remnant).setTo(2.0f);
+  newest.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  cv::Mat repaired = cv::Mat::zeros(newest.depth.size(), CV_8UC1);
+  repaired(remnant).setTo(255);
+  const View older = render(cam, T_w_older, false);
+  const View cur = render(cam, T_w_cur, true);
+  const cv::Mat mask = cur.depth < 2.0f;
+  const std::vector<SourceView> sources = {{T_w_newest, newest.bgr, newest.depth, {}, repaired},
+                                           {T_w_older, older.bgr, older.depth, {}, {}}};
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  auto red_pixels = [&](const InpaintingResult& r) {
+    cv::Mat red;
+    cv::inRange(r.bgr, cv::Scalar(0, 0, 250), cv::Scalar(5, 5, 255), red);
+    return cv::countNonZero(red & r.filled);
+  };
+  const auto observed_first =
+      inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_EQ(red_pixels(observed_first), 0);
+  EXPECT_GT(observed_first.filled_pixels, 0.98 * observed_first.masked_pixels);
+  config.observed_first = false;
+  const auto one_pass = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_GT(red_pixels(one_pass), 500);
+}
+
 TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
   const auto cam = test_camera();
   const SE3 T_w;

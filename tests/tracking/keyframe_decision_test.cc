@@ -15,7 +15,7 @@ KeyFrameContext healthy_context() {
   c.keyframes_in_map = 10;
   c.reference_tracked_points = 400;
   c.inliers = 380;  // 95% of the reference: tracking is strong
-  c.close = {300, 20};
+  c.close = {300, 20, 300};
   return c;
 }
 
@@ -41,11 +41,26 @@ TEST(KeyFrameDecisionTest, InsertsWhenInliersDropBelowReferenceRatioAndMappingId
 
 TEST(KeyFrameDecisionTest, CloseDepthCriterion) {
   KeyFrameContext c = healthy_context();
-  c.close = {99, 71};  // few tracked close points, many untracked ones
+  c.close = {99, 71, 99};  // few tracked close points, many untracked ones
   EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
-  c.close = {100, 71};
+  c.close = {100, 71, 100};
   EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
-  c.close = {99, 70};
+  c.close = {99, 70, 99};
+  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+}
+
+TEST(KeyFrameDecisionTest, FreshPointsOfTheLastKeyframeDoNotCountAsTrackedClose) {
+  // Exploration: the frame tracks 450 close points, but only 80 of them were seen by more than
+  // the last keyframe, which created the rest from depth.
+  KeyFrameContext c = healthy_context();
+  c.reference_tracked_points = 100;  // the last keyframe's points of >= 2 keyframes
+  c.inliers = 460;
+  c.close = {450, 500, 80};
+  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  KeyFrameConfig orb_slam2;
+  orb_slam2.close_needs_two_keyframes = false;  // ORB-SLAM2 counts all 450: no keyframe
+  EXPECT_FALSE(need_new_keyframe(orb_slam2, c));
+  c.close.tracked_established = 100;
   EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
 }
 

@@ -120,46 +120,61 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
   // Which source won each pixel (for the colour resampling below).
   cv::Mat winner(mask.size(), CV_8UC1, cv::Scalar(0));
-  for (std::size_t s = 0; s < count; ++s) {
-    const SourceView& src = sources[s];
-    const SE3 T_cur_src = T_c_w * src.T_w_c;
-    const Mat3d R = T_cur_src.rotation();
-    const Vec3d t = T_cur_src.translation();
-    for (int v = 0; v < src.depth_m.rows; v += config.source_stride_px) {
-      const float* drow = src.depth_m.ptr<float>(v);
-      const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
-      const std::uint8_t* xrow = src.exclude_mask.empty() ? nullptr : src.exclude_mask.ptr(v);
-      for (int u = 0; u < src.depth_m.cols; u += config.source_stride_px) {
-        const float z = drow[u];
-        if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
-        const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
-        const Vec3d p = R * p_src + t;
-        if (p.z() <= 0.05) continue;
-        const double uc = fx * p.x() / p.z() + cx;
-        const double vc = fy * p.y() / p.z() + cy;
-        const int iu = static_cast<int>(std::lround(uc));
-        const int iv = static_cast<int>(std::lround(vc));
-        if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
-        const float zc = static_cast<float>(p.z());
-        const float tol = tol_abs + tol_rel * zc;
-        for (int dv = -r; dv <= r; ++dv) {
-          const int y = iv + dv;
-          if (y < 0 || y >= h) continue;
-          const std::uint8_t* mrow = mask.ptr(y);
-          const float* drow_cur = depth_m.ptr<float>(y);
-          float* zrow = zbuf.ptr<float>(y);
-          for (int du = -r; du <= r; ++du) {
-            const int x = iu + du;
-            if (x < 0 || x >= w || mrow[x] == 0) continue;
-            if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) continue;
-            // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
-            if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
-                                       out.filled.at<std::uint8_t>(y, x) != 2)) {
-              zrow[x] = zc;
-              out.bgr.at<cv::Vec3b>(y, x) = crow[u];
-              out.depth_m.at<float>(y, x) = zc;
-              out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
-              winner.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(s);
+  // Pass 0: observed source pixels; pass 1 (observed_first): repaired source pixels, only into
+  // target pixels pass 0 left empty. Without observed_first one pass takes every pixel.
+  const int passes = config.observed_first ? 2 : 1;
+  cv::Mat locked;  // target pixels filled by observed samples (pass 1 leaves them alone)
+  for (int pass = 0; pass < passes; ++pass) {
+    if (pass == 1) locked = out.filled != 0;
+    for (std::size_t s = 0; s < count; ++s) {
+      const SourceView& src = sources[s];
+      if (pass == 1 && src.repaired_mask.empty()) continue;
+      const SE3 T_cur_src = T_c_w * src.T_w_c;
+      const Mat3d R = T_cur_src.rotation();
+      const Vec3d t = T_cur_src.translation();
+      for (int v = 0; v < src.depth_m.rows; v += config.source_stride_px) {
+        const float* drow = src.depth_m.ptr<float>(v);
+        const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
+        const std::uint8_t* xrow = src.exclude_mask.empty() ? nullptr : src.exclude_mask.ptr(v);
+        const std::uint8_t* rrow = src.repaired_mask.empty() ? nullptr : src.repaired_mask.ptr(v);
+        for (int u = 0; u < src.depth_m.cols; u += config.source_stride_px) {
+          const float z = drow[u];
+          if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
+          if (passes == 2) {
+            const bool repaired = rrow != nullptr && rrow[u] != 0;
+            if (repaired != (pass == 1)) continue;
+          }
+          const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
+          const Vec3d p = R * p_src + t;
+          if (p.z() <= 0.05) continue;
+          const double uc = fx * p.x() / p.z() + cx;
+          const double vc = fy * p.y() / p.z() + cy;
+          const int iu = static_cast<int>(std::lround(uc));
+          const int iv = static_cast<int>(std::lround(vc));
+          if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
+          const float zc = static_cast<float>(p.z());
+          const float tol = tol_abs + tol_rel * zc;
+          for (int dv = -r; dv <= r; ++dv) {
+            const int y = iv + dv;
+            if (y < 0 || y >= h) continue;
+            const std::uint8_t* mrow = mask.ptr(y);
+            const float* drow_cur = depth_m.ptr<float>(y);
+            float* zrow = zbuf.ptr<float>(y);
+            const std::uint8_t* lrow = pass == 1 ? locked.ptr(y) : nullptr;
+            for (int du = -r; du <= r; ++du) {
+              const int x = iu + du;
+              if (x < 0 || x >= w || mrow[x] == 0) continue;
+              if (lrow != nullptr && lrow[x] != 0) continue;
+              if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) continue;
+              // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
+              if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
+                                         out.filled.at<std::uint8_t>(y, x) != 2)) {
+                zrow[x] = zc;
+                out.bgr.at<cv::Vec3b>(y, x) = crow[u];
+                out.depth_m.at<float>(y, x) = zc;
+                out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
+                winner.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(s);
+              }
             }
           }
         }

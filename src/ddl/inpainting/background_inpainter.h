@@ -13,7 +13,9 @@
 // one surface, so the newest keyframe's centre sample wins over noisy older ones instead of
 // a mosaic of sources; and a sample nearer than what the current frame measures at that pixel
 // (by more than the tolerance) is rejected: the current ray is free up to its depth, so such a
-// sample is content that is gone (a moving object a source keyframe's mask missed).
+// sample is content that is gone (a moving object a source keyframe's mask missed). With
+// observed_first, what the keyframes observed is splatted before what they repaired themselves,
+// so a repair's mistakes do not spread to later repairs where an observation is available.
 // Thread-safety: pure functions of their inputs.
 
 #include <opencv2/core.hpp>
@@ -36,6 +38,10 @@ struct InpaintingConfig {
   int source_stride_px = 1;            // sample every n-th source pixel (speed/quality trade-off)
   bool resample_colour = true;  // colour read back bilinearly from the winning keyframe at the
                                 // splatted depth (sub-pixel exact) instead of the splatted sample
+  /// Samples from pixels a keyframe observed are splatted first; pixels it repaired itself only
+  /// fill what no observed sample reached. Otherwise a piece of a person that one repair let
+  /// through is copied from repair to repair and the error accumulates over the sequence.
+  bool observed_first = true;
 
   /// Throws ddl::ConfigError naming "inpainting.<field>".
   void validate() const;
@@ -48,6 +54,8 @@ struct SourceView {
   cv::Mat depth_m;  // CV_32FC1 metres (repaired, when available), 0 = none
   cv::Mat
       exclude_mask;  // CV_8UC1 non-zero = do not use (dynamic pixels left unfilled); may be empty
+  /// CV_8UC1 non-zero = this keyframe's own repair filled the pixel (not observed); may be empty.
+  cv::Mat repaired_mask;
 };
 
 struct InpaintingResult {

@@ -86,7 +86,7 @@ void DenseMapper::finish() {
 
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
-  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat()};
+  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat(), cv::Mat()};
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
   if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
@@ -95,13 +95,14 @@ void DenseMapper::process(DenseKeyframe item) {
         stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes));
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
-      sources.push_back({s.keyframe->T_w_c(), s.bgr, s.depth_m, s.exclude});
+      sources.push_back({s.keyframe->T_w_c(), s.bgr, s.depth_m, s.exclude, s.repaired});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
         item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
     stored.bgr = r.bgr;
     stored.depth_m = r.depth_m;
     stored.unfilled = r.unfilled;
+    stored.repaired = mask & ~r.unfilled;
     std::lock_guard lock(stats_mutex_);
     stats_.masked_pixels += r.masked_pixels;
     stats_.filled_pixels += r.filled_pixels;

@@ -85,6 +85,7 @@ class DenseMapper {
     cv::Mat depth_m;   // repaired
     cv::Mat unfilled;  // still-dynamic pixels
     cv::Mat exclude;   // unfilled and the border band around the mask: not a source, not mapped
+    cv::Mat repaired;  // pixels its own repair filled (a source after observed pixels)
   };
   void worker();
   void process(DenseKeyframe item);

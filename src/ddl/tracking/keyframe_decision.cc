@@ -2,12 +2,14 @@
 
 namespace ddl::tracking {
 
-CloseCounts count_close_points(const Frame& frame) {
+CloseCounts count_close_points(const Frame& frame, int min_observations) {
   CloseCounts counts;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (!frame.is_close(i)) continue;
-    if (frame.map_point(i) && !frame.is_outlier(i)) {
+    const map::MapPointPtr& point = frame.map_point(i);
+    if (point && !frame.is_outlier(i)) {
       ++counts.tracked;
+      if (point->num_observations() >= min_observations) ++counts.tracked_established;
     } else {
       ++counts.non_tracked;
     }
@@ -27,7 +29,9 @@ bool need_new_keyframe(const KeyFrameConfig& config, const KeyFrameContext& c) {
     return false;
   }
   const bool mapping_idle = c.mapping.accepts_keyframes;
-  const bool need_close = c.close.tracked < config.tracked_close_max &&
+  const int tracked_close =
+      config.close_needs_two_keyframes ? c.close.tracked_established : c.close.tracked;
+  const bool need_close = tracked_close < config.tracked_close_max &&
                           c.close.non_tracked > config.non_tracked_close_min;
   const float ratio =
       c.keyframes_in_map < 2 ? config.reference_ratio_single_keyframe : config.reference_ratio;

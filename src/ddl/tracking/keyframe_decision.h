@@ -15,11 +15,14 @@ namespace ddl::tracking {
 
 /// Tracked / untracked features with close depth in a frame.
 struct CloseCounts {
-  int tracked = 0;      // close features matched to a map point (not outliers)
-  int non_tracked = 0;  // close features without a map point (candidates for new points)
+  int tracked = 0;              // close features matched to a map point (not outliers)
+  int non_tracked = 0;          // close features without a map point (candidates for new points)
+  int tracked_established = 0;  // tracked ones whose point has >= min_observations (seen by
+                                // two keyframes, not only created from depth by the last one)
 };
 
-CloseCounts count_close_points(const Frame& frame);
+/// `min_observations`: see min_observations_for().
+CloseCounts count_close_points(const Frame& frame, int min_observations);
 
 /// Everything the decision depends on, gathered by the Tracker.
 struct KeyFrameContext {
@@ -38,7 +41,14 @@ struct KeyFrameContext {
 /// map has <= 2 keyframes).
 int min_observations_for(std::size_t keyframes_in_map);
 
-/// The decision; true = create a keyframe from this frame now.
+/// The decision; true = create a keyframe from this frame now. With
+/// `config.close_needs_two_keyframes` the close-point criterion counts `close.tracked_established`
+/// instead of `close.tracked`: a keyframe creates points from depth for nearly all its close
+/// features, and when the camera keeps exploring, the frames after it track mostly those fresh
+/// points, so ORB-SLAM2's count stays high until almost nothing links the frame to the keyframes
+/// before (and the reference count of the inlier-ratio test, points of >= 2 keyframes, is about
+/// that small link, so that test does not fire either): keyframes become sparse and each is held
+/// to its predecessor by about `tracked_close_max` points.
 bool need_new_keyframe(const KeyFrameConfig& config, const KeyFrameContext& context);
 
 }  // namespace ddl::tracking

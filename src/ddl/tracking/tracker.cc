@@ -364,18 +364,18 @@ void Tracker::maybe_create_keyframe(Frame& frame, const MappingStatus& mapping,
   context.last_keyframe_frame_id = last_keyframe_frame_id_;
   context.last_relocalization_frame_id = last_relocalization_frame_id_;
   context.keyframes_in_map = map_->keyframe_count();
-  context.reference_tracked_points =
-      reference_keyframe_->tracked_map_points(min_observations_for(context.keyframes_in_map));
+  const int min_observations = min_observations_for(context.keyframes_in_map);
+  context.reference_tracked_points = reference_keyframe_->tracked_map_points(min_observations);
   context.inliers = local_map_inliers_;
-  context.close = count_close_points(frame);
+  context.close = count_close_points(frame, min_observations);
   context.mapping = mapping;
   const bool insert = need_new_keyframe(config_.keyframes, context);
   spdlog::debug(
       "frame {}: keyframe {} (map {} keyframes, reference {} with {} points, {} inliers, close "
-      "tracked {} / untracked {}, mapping {})",
+      "tracked {} ({} of >= 2 keyframes) / untracked {}, mapping {})",
       frame.id(), insert ? "inserted" : "not needed", context.keyframes_in_map,
       reference_keyframe_->id(), context.reference_tracked_points, context.inliers,
-      context.close.tracked, context.close.non_tracked,
+      context.close.tracked, context.close.tracked_established, context.close.non_tracked,
       mapping.accepts_keyframes ? "idle" : "busy");
   if (!insert) return;
 

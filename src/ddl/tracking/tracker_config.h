@@ -44,7 +44,9 @@ struct KeyFrameConfig {
   int max_frames = 30;  // ... and is inserted after this many frames at the latest (= fps)
   int tracked_close_max = 100;     // "need close points": fewer tracked close points than this
   int non_tracked_close_min = 70;  // ... and more untracked close points than this
-  float reference_ratio = 0.75f;   // inliers below this fraction of the reference's points
+  bool close_needs_two_keyframes = true;  // tracked close points count only when seen by >= 2
+                                          // keyframes (ORB-SLAM2: false, fresh ones count too)
+  float reference_ratio = 0.75f;          // inliers below this fraction of the reference's points
   float reference_ratio_single_keyframe = 0.4f;  // the same while the map has one keyframe
   float weak_tracking_ratio = 0.25f;  // inliers below this fraction: insert even when busy
   int min_inliers = 15;               // never insert with this many inliers or fewer
