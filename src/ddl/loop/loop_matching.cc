@@ -19,50 +19,40 @@ std::vector<map::MapPointPtr> search_by_bow(const map::KeyFrame& kf1, const map:
   std::vector<bool> used2(f2.size(), false);
   features::RotationHistogram histogram;
 
-  auto it1 = fv1.begin();
-  auto it2 = fv2.begin();
-  while (it1 != fv1.end() && it2 != fv2.end()) {
-    if (it1->node_id < it2->node_id) {
-      ++it1;
-      continue;
-    }
-    if (it2->node_id < it1->node_id) {
-      ++it2;
-      continue;
-    }
-    for (const std::uint32_t i1 : it1->feature_indices) {
-      const map::MapPointPtr& p1 = points1[i1];
-      if (!p1 || p1->is_bad()) continue;
-      int best = 257;
-      int second = 257;
-      long best_i2 = -1;
-      for (const std::uint32_t i2 : it2->feature_indices) {
-        const map::MapPointPtr& p2 = points2[i2];
-        if (used2[i2] || !p2 || p2->is_bad()) continue;
-        const int d = features::hamming_distance(f1.descriptors, static_cast<int>(i1),
-                                                 f2.descriptors, static_cast<int>(i2));
-        if (d < best) {
-          second = best;
-          best = d;
-          best_i2 = i2;
-        } else if (d < second) {
-          second = d;
+  vocabulary::for_each_shared_node(
+      fv1, fv2,
+      [&](const std::vector<std::uint32_t>& node1, const std::vector<std::uint32_t>& node2) {
+        for (const std::uint32_t i1 : node1) {
+          const map::MapPointPtr& p1 = points1[i1];
+          if (!p1 || p1->is_bad()) continue;
+          int best = 257;
+          int second = 257;
+          long best_i2 = -1;
+          for (const std::uint32_t i2 : node2) {
+            const map::MapPointPtr& p2 = points2[i2];
+            if (used2[i2] || !p2 || p2->is_bad()) continue;
+            const int d = features::hamming_distance(f1.descriptors, static_cast<int>(i1),
+                                                     f2.descriptors, static_cast<int>(i2));
+            if (d < best) {
+              second = best;
+              best = d;
+              best_i2 = i2;
+            } else if (d < second) {
+              second = d;
+            }
+          }
+          if (best_i2 < 0 || best >= max_hamming ||
+              static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+            continue;
+          }
+          const auto i2 = static_cast<std::size_t>(best_i2);
+          used2[i2] = true;
+          matches[i1] = points2[i2];
+          if (check_orientation) {
+            histogram.add(f1.keypoints[i1].angle, f2.keypoints[i2].angle, static_cast<int>(i1));
+          }
         }
-      }
-      if (best_i2 < 0 || best >= max_hamming ||
-          static_cast<float>(best) >= ratio * static_cast<float>(second)) {
-        continue;
-      }
-      const auto i2 = static_cast<std::size_t>(best_i2);
-      used2[i2] = true;
-      matches[i1] = points2[i2];
-      if (check_orientation) {
-        histogram.add(f1.keypoints[i1].angle, f2.keypoints[i2].angle, static_cast<int>(i1));
-      }
-    }
-    ++it1;
-    ++it2;
-  }
+      });
   if (check_orientation) {
     for (const int i1 : histogram.inconsistent_ids()) matches[static_cast<std::size_t>(i1)].reset();
   }

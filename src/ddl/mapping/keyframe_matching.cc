@@ -55,55 +55,45 @@ std::vector<FeaturePair> search_for_triangulation(const map::KeyFrame& kf1,
   std::vector<FeaturePair> pairs;
   features::RotationHistogram histogram;
 
-  auto it1 = fv1.begin();
-  auto it2 = fv2.begin();
-  while (it1 != fv1.end() && it2 != fv2.end()) {
-    if (it1->node_id < it2->node_id) {
-      ++it1;
-      continue;
-    }
-    if (it2->node_id < it1->node_id) {
-      ++it2;
-      continue;
-    }
-    for (const std::uint32_t i1 : it1->feature_indices) {
-      if (points1[i1]) continue;
-      const bool stereo1 = has_stereo(f1, i1);
-      const cv::KeyPoint& kp1 = f1.keypoints[i1];
-      int best_distance = config.max_hamming + 1;
-      long best_i2 = -1;
-      for (const std::uint32_t i2 : it2->feature_indices) {
-        if (used2[i2] || points2[i2]) continue;
-        const int distance = features::hamming_distance(f1.descriptors, static_cast<int>(i1),
-                                                        f2.descriptors, static_cast<int>(i2));
-        if (distance >= best_distance) continue;
-        const cv::KeyPoint& kp2 = f2.keypoints[i2];
-        const auto level2 = static_cast<std::size_t>(kp2.octave);
-        if (!stereo1 && !has_stereo(f2, i2) && epipole_valid) {
-          // Without depth on either side a match next to the epipole has no parallax.
-          const double dx = epipole.x() - kp2.pt.x;
-          const double dy = epipole.y() - kp2.pt.y;
-          const double min_px = config.epipole_min_px;
-          if (dx * dx + dy * dy < min_px * min_px * f2.pyramid.scale_factors[level2]) continue;
+  vocabulary::for_each_shared_node(
+      fv1, fv2,
+      [&](const std::vector<std::uint32_t>& node1, const std::vector<std::uint32_t>& node2) {
+        for (const std::uint32_t i1 : node1) {
+          if (points1[i1]) continue;
+          const bool stereo1 = has_stereo(f1, i1);
+          const cv::KeyPoint& kp1 = f1.keypoints[i1];
+          int best_distance = config.max_hamming + 1;
+          long best_i2 = -1;
+          for (const std::uint32_t i2 : node2) {
+            if (used2[i2] || points2[i2]) continue;
+            const int distance = features::hamming_distance(f1.descriptors, static_cast<int>(i1),
+                                                            f2.descriptors, static_cast<int>(i2));
+            if (distance >= best_distance) continue;
+            const cv::KeyPoint& kp2 = f2.keypoints[i2];
+            const auto level2 = static_cast<std::size_t>(kp2.octave);
+            if (!stereo1 && !has_stereo(f2, i2) && epipole_valid) {
+              // Without depth on either side a match next to the epipole has no parallax.
+              const double dx = epipole.x() - kp2.pt.x;
+              const double dy = epipole.y() - kp2.pt.y;
+              const double min_px = config.epipole_min_px;
+              if (dx * dx + dy * dy < min_px * min_px * f2.pyramid.scale_factors[level2]) continue;
+            }
+            if (!near_epipolar_line(kp1, kp2, F12, f2.pyramid.level_sigma2[level2],
+                                    config.epipolar_chi2)) {
+              continue;
+            }
+            best_distance = distance;
+            best_i2 = i2;
+          }
+          if (best_i2 < 0) continue;
+          used2[static_cast<std::size_t>(best_i2)] = true;
+          if (config.check_orientation) {
+            histogram.add(kp1.angle, f2.keypoints[static_cast<std::size_t>(best_i2)].angle,
+                          static_cast<int>(pairs.size()));
+          }
+          pairs.push_back({i1, static_cast<std::size_t>(best_i2)});
         }
-        if (!near_epipolar_line(kp1, kp2, F12, f2.pyramid.level_sigma2[level2],
-                                config.epipolar_chi2)) {
-          continue;
-        }
-        best_distance = distance;
-        best_i2 = i2;
-      }
-      if (best_i2 < 0) continue;
-      used2[static_cast<std::size_t>(best_i2)] = true;
-      if (config.check_orientation) {
-        histogram.add(kp1.angle, f2.keypoints[static_cast<std::size_t>(best_i2)].angle,
-                      static_cast<int>(pairs.size()));
-      }
-      pairs.push_back({i1, static_cast<std::size_t>(best_i2)});
-    }
-    ++it1;
-    ++it2;
-  }
+      });
 
   if (config.check_orientation) {
     std::vector<bool> keep(pairs.size(), false);

@@ -83,4 +83,23 @@ class FeatureVector {
   std::vector<FeatureNode> nodes_;
 };
 
+/// Walks two FeatureVectors in step and calls visit(features_a, features_b) for every node both
+/// have, in ascending node order (the candidate pairs of SearchByBoW-style matching).
+template <class Visit>
+void for_each_shared_node(const FeatureVector& a, const FeatureVector& b, Visit&& visit) {
+  auto it_a = a.begin();
+  auto it_b = b.begin();
+  while (it_a != a.end() && it_b != b.end()) {
+    if (it_a->node_id < it_b->node_id) {
+      ++it_a;
+    } else if (it_b->node_id < it_a->node_id) {
+      ++it_b;
+    } else {
+      visit(it_a->feature_indices, it_b->feature_indices);
+      ++it_a;
+      ++it_b;
+    }
+  }
+}
+
 }  // namespace ddl::vocabulary
