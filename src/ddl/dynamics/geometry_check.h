@@ -47,7 +47,8 @@ struct GeometryCheckConfig {
   /// motion depth and pose disagree by a share of that motion at every depth edge.
   double motion_window_gain = 0.5;
   int max_window_radius_px = 24;      // cap of the motion-grown seed window
-  int min_seed_support = 1;           // seeds needed inside a grown region to keep it
+  int min_seed_support = 2;           // seeds needed inside a grown region to keep it (real depth:
+                                      // lone seeds at noisy edges grew false regions)
   double region_depth_band_m = 0.25;  // flood fill: |depth - seed depth| below this joins
   int region_max_radius_px = 200;     // flood fill stays inside this radius around its seed
   int dilation_px = 2;                // final dilation of the geometry mask
