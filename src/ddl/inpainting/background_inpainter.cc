@@ -1,6 +1,8 @@
 #include "ddl/inpainting/background_inpainter.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
 #include <vector>
@@ -24,6 +26,10 @@ void InpaintingConfig::validate() const {
 }
 
 namespace {
+
+// Samples nearer than this to the current camera are ignored (below any RGB-D sensor's range);
+// it bounds the source window of each keyframe.
+constexpr double kMinSampleDepth = 0.3;
 
 /// Splatting copies a source pixel to the nearest target pixels, which shifts fine texture by up
 /// to half a pixel (more with the splat radius). Each filled pixel instead takes its colour from
@@ -83,6 +89,39 @@ void resample_colour(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& 
   }
 }
 
+/// The source pixels whose samples can land in `target_box` of the current image: the part of
+/// the current view through that box between kMinSampleDepth and max_depth_m is a frustum, and
+/// its 8 corners, projected into the source, bound it there (convex hull -> bounding box). The
+/// whole source image when a corner lies behind the source camera.
+cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
+                       const camera::PinholeCamera& camera, double max_depth_m,
+                       cv::Size source_size) {
+  const cv::Rect whole({0, 0}, source_size);
+  double u_min = std::numeric_limits<double>::infinity(), v_min = u_min;
+  double u_max = -u_min, v_max = -u_min;
+  for (const double z : {kMinSampleDepth, max_depth_m}) {
+    for (const int x : {target_box.x - 1, target_box.x + target_box.width}) {
+      for (const int y : {target_box.y - 1, target_box.y + target_box.height}) {
+        const Vec3d p =
+            T_src_cur * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
+        if (p.z() <= 0.05) return whole;
+        const double u = camera.fx * p.x() / p.z() + camera.cx;
+        const double v = camera.fy * p.y() / p.z() + camera.cy;
+        u_min = std::min(u_min, u);
+        u_max = std::max(u_max, u);
+        v_min = std::min(v_min, v);
+        v_max = std::max(v_max, v);
+      }
+    }
+  }
+  const double big = 1e6;  // keeps the casts defined for far-off projections
+  const int x0 = static_cast<int>(std::floor(std::clamp(u_min, -big, big))) - 1;
+  const int y0 = static_cast<int>(std::floor(std::clamp(v_min, -big, big))) - 1;
+  const int x1 = static_cast<int>(std::ceil(std::clamp(u_max, -big, big))) + 2;
+  const int y1 = static_cast<int>(std::ceil(std::clamp(v_max, -big, big))) + 2;
+  return cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & whole;
+}
+
 }  // namespace
 
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
@@ -132,12 +171,18 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
       const Vec3d t = T_cur_src.translation();
-      for (int v = 0; v < src.depth_m.rows; v += config.source_stride_px) {
+      // Only the source pixels that can reach the target's box (stride-aligned).
+      const cv::Rect window = source_window(reach_box, T_cur_src.inverse(), camera,
+                                            config.max_depth_m, src.depth_m.size());
+      const int stride = config.source_stride_px;
+      const int v_begin = (window.y + stride - 1) / stride * stride;
+      const int u_begin = (window.x + stride - 1) / stride * stride;
+      for (int v = v_begin; v < window.y + window.height; v += stride) {
         const float* drow = src.depth_m.ptr<float>(v);
         const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
         const std::uint8_t* xrow = src.exclude_mask.empty() ? nullptr : src.exclude_mask.ptr(v);
         const std::uint8_t* rrow = src.repaired_mask.empty() ? nullptr : src.repaired_mask.ptr(v);
-        for (int u = 0; u < src.depth_m.cols; u += config.source_stride_px) {
+        for (int u = u_begin; u < window.x + window.width; u += stride) {
           const float z = drow[u];
           if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
           if (passes == 2) {
@@ -146,11 +191,12 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
           }
           const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
           const Vec3d p = R * p_src + t;
-          if (p.z() <= 0.05) continue;
+          if (p.z() < kMinSampleDepth || p.z() > config.max_depth_m) continue;
           const double uc = fx * p.x() / p.z() + cx;
           const double vc = fy * p.y() / p.z() + cy;
-          const int iu = static_cast<int>(std::lround(uc));
-          const int iv = static_cast<int>(std::lround(vc));
+          if (!(std::abs(uc) < 1e6 && std::abs(vc) < 1e6)) continue;
+          const int iu = cvRound(uc);
+          const int iv = cvRound(vc);
           if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
           const float zc = static_cast<float>(p.z());
           const float tol = tol_abs + tol_rel * zc;

@@ -32,7 +32,7 @@ struct InpaintingConfig {
   double depth_tolerance_m = 0.02;     // z-buffer: nearer by more than this wins
   double depth_tolerance_rel = 0.03;   // tolerance grows by this fraction of the depth (noise)
   bool free_space_check = true;        // reject samples in front of the current frame's depth
-  double max_depth_m = 6.0;            // ignore source depth beyond this
+  double max_depth_m = 6.0;            // ignore samples beyond this (source and current depth)
   bool image_fill_small_holes = true;  // Telea fill for holes left after projection
   int max_hole_area_px = 400;          // only holes (connected components) up to this size
   int source_stride_px = 1;            // sample every n-th source pixel (speed/quality trade-off)
