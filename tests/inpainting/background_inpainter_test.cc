@@ -138,6 +138,7 @@ TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
                                {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
   EXPECT_EQ(red_pixels(checked), 0);
   config.free_space_check = false;
+  config.behind_current_only = false;  // it would reject the remnant too
   const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
                                  {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
   EXPECT_GT(red_pixels(unchecked), 500);
@@ -176,6 +177,33 @@ TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
   config.observed_first = false;
   const auto one_pass = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_GT(red_pixels(one_pass), 500);
+}
+
+// A keyframe whose mask missed the person saw it at the same place: its person pixels land at
+// the current person's own depth. The background lies behind what the mask covers, so they are
+// rejected (the free-space check alone lets them through: they are not in front).
+TEST(Inpainting, SamplesAtTheMaskedSurfacesOwnDepthAreRejected) {
+  const auto cam = test_camera();
+  const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.1, 0.0, 0.0));
+  const SE3 T_w_cur;
+  const View kf = render(cam, T_w_kf, true);  // unmasked person
+  const View cur = render(cam, T_w_cur, true);
+  const cv::Mat mask = cur.depth < 2.0f;
+  const std::vector<SourceView> sources = {{T_w_kf, kf.bgr, kf.depth, {}, {}}};
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  auto grey_pixels = [&](const InpaintingResult& r) {
+    cv::Mat grey;
+    cv::inRange(r.bgr, cv::Scalar(88, 88, 88), cv::Scalar(92, 92, 92), grey);
+    return cv::countNonZero(grey & r.filled);
+  };
+  const auto behind_only =
+      inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_EQ(grey_pixels(behind_only), 0);
+  EXPECT_GT(behind_only.filled_pixels, 1000);  // the wall the keyframe saw beside the person
+  config.behind_current_only = false;
+  const auto any_depth = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_GT(grey_pixels(any_depth), 5000);
 }
 
 TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {

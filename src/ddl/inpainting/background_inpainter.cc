@@ -212,6 +212,9 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
               if (x < 0 || x >= w || mrow[x] == 0) continue;
               if (lrow != nullptr && lrow[x] != 0) continue;
               if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) continue;
+              if (config.behind_current_only && drow_cur[x] > 0.0f && zc <= drow_cur[x] + tol) {
+                continue;
+              }
               // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
               if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
                                          out.filled.at<std::uint8_t>(y, x) != 2)) {

@@ -27,11 +27,16 @@
 namespace ddl::inpainting {
 
 struct InpaintingConfig {
-  int num_keyframes = 15;              // last keyframes projected (paper: 15)
-  int splat_radius_px = 1;             // each source pixel covers (2r+1)^2 target pixels (0 = one)
-  double depth_tolerance_m = 0.02;     // z-buffer: nearer by more than this wins
-  double depth_tolerance_rel = 0.03;   // tolerance grows by this fraction of the depth (noise)
-  bool free_space_check = true;        // reject samples in front of the current frame's depth
+  int num_keyframes = 15;             // last keyframes projected (paper: 15)
+  int splat_radius_px = 1;            // each source pixel covers (2r+1)^2 target pixels (0 = one)
+  double depth_tolerance_m = 0.02;    // z-buffer: nearer by more than this wins
+  double depth_tolerance_rel = 0.03;  // tolerance grows by this fraction of the depth (noise)
+  bool free_space_check = true;       // reject samples in front of the current frame's depth
+  /// Also reject samples at the masked pixel's own depth (within the tolerance): what hides the
+  /// background there is that surface, so such a sample is the moving object itself, seen by a
+  /// keyframe whose mask missed it (or static surface the mask over-covers, which the pixel
+  /// already shows). The background lies behind.
+  bool behind_current_only = true;
   double max_depth_m = 6.0;            // ignore samples beyond this (source and current depth)
   bool image_fill_small_holes = true;  // Telea fill for holes left after projection
   int max_hole_area_px = 400;          // only holes (connected components) up to this size
