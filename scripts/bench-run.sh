@@ -72,6 +72,7 @@ for i in range(1, runs + 1):
         "geometry_ms": med("geometry_check"),
         "frame_ms": med("frame_total"),
         "fps": d.get("frames_per_second"),
+        "tracking_fps": d.get("tracking_frames_per_second"),
         "wall_s": float(wall_s),
         "peak_mb": int(rss_kb) / 1024.0,
     })
