@@ -65,6 +65,20 @@ double psnr_over(const cv::Mat& a, const cv::Mat& b, const cv::Mat& where) {
   return 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
+// Filled pixels of a pure red remnant (BGR 0, 0, 255).
+int red_pixels(const InpaintingResult& r) {
+  cv::Mat red;
+  cv::inRange(r.bgr, cv::Scalar(0, 0, 250), cv::Scalar(5, 5, 255), red);
+  return cv::countNonZero(red & r.filled);
+}
+
+// Filled pixels of the rendered grey person (BGR 90, 90, 90).
+int grey_pixels(const InpaintingResult& r) {
+  cv::Mat grey;
+  cv::inRange(r.bgr, cv::Scalar(88, 88, 88), cv::Scalar(92, 92, 92), grey);
+  return cv::countNonZero(grey & r.filled);
+}
+
 TEST(Inpainting, FillsThePersonFromAnEarlierKeyframe) {
   const auto cam = test_camera();
   const SE3 T_w_kf(Mat3d(Eigen::AngleAxisd(0.05, Vec3d::UnitY())), Vec3d(0.4, 0.0, 0.0));
@@ -79,7 +93,7 @@ TEST(Inpainting, FillsThePersonFromAnEarlierKeyframe) {
   InpaintingConfig config;
   config.image_fill_small_holes = false;
   const auto result = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
-                              {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+                              {{T_w_kf, kf.bgr, kf.depth, {}, {}}}, cam, config);
   EXPECT_EQ(result.masked_pixels, cv::countNonZero(mask));
   EXPECT_GT(result.filled_pixels, 0.98 * result.masked_pixels);
   const double psnr = psnr_over(result.bgr, truth.bgr, result.filled);
@@ -108,7 +122,7 @@ TEST(Inpainting, ExcludedSourcePixelsAreNotUsedAndStayUnfilled) {
   config.image_fill_small_holes = false;
   config.splat_radius_px = 0;
   const auto result = inpaint(cur.bgr, cur.depth, mask, T_w.inverse(),
-                              {{T_w, kf.bgr, kf.depth, kf.depth < 2.0f}}, cam, config);
+                              {{T_w, kf.bgr, kf.depth, kf.depth < 2.0f, {}}}, cam, config);
   EXPECT_EQ(result.filled_pixels, 0);
   EXPECT_EQ(cv::countNonZero(result.unfilled), cv::countNonZero(mask));
   // Unknown pixels carry no depth (not the person's).
@@ -129,18 +143,13 @@ TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
   const cv::Mat mask = cur.depth < 2.0f;
   InpaintingConfig config;
   config.image_fill_small_holes = false;
-  auto red_pixels = [&](const InpaintingResult& r) {
-    cv::Mat red;
-    cv::inRange(r.bgr, cv::Scalar(0, 0, 250), cv::Scalar(5, 5, 255), red);
-    return cv::countNonZero(red & r.filled);
-  };
   const auto checked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
-                               {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+                               {{T_w_kf, kf.bgr, kf.depth, {}, {}}}, cam, config);
   EXPECT_EQ(red_pixels(checked), 0);
   config.free_space_check = false;
   config.behind_current_only = false;  // it would reject the remnant too
   const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(),
-                                 {{T_w_kf, kf.bgr, kf.depth, {}}}, cam, config);
+                                 {{T_w_kf, kf.bgr, kf.depth, {}, {}}}, cam, config);
   EXPECT_GT(red_pixels(unchecked), 500);
 }
 
@@ -165,11 +174,6 @@ TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
                                            {T_w_older, older.bgr, older.depth, {}, {}}};
   InpaintingConfig config;
   config.image_fill_small_holes = false;
-  auto red_pixels = [&](const InpaintingResult& r) {
-    cv::Mat red;
-    cv::inRange(r.bgr, cv::Scalar(0, 0, 250), cv::Scalar(5, 5, 255), red);
-    return cv::countNonZero(red & r.filled);
-  };
   const auto observed_first =
       inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_EQ(red_pixels(observed_first), 0);
@@ -192,11 +196,6 @@ TEST(Inpainting, SamplesAtTheMaskedSurfacesOwnDepthAreRejected) {
   const std::vector<SourceView> sources = {{T_w_kf, kf.bgr, kf.depth, {}, {}}};
   InpaintingConfig config;
   config.image_fill_small_holes = false;
-  auto grey_pixels = [&](const InpaintingResult& r) {
-    cv::Mat grey;
-    cv::inRange(r.bgr, cv::Scalar(88, 88, 88), cv::Scalar(92, 92, 92), grey);
-    return cv::countNonZero(grey & r.filled);
-  };
   const auto behind_only =
       inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_EQ(grey_pixels(behind_only), 0);
