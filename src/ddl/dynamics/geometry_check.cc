@@ -218,8 +218,10 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
     const std::size_t step =
         std::max<std::size_t>(1, n / static_cast<std::size_t>(config.max_points_per_keyframe));
     const SE3 T_cur_ref = T_c_w * view.T_w_c;
-    const std::optional<SE3> T_prev_ref =
-        T_c_w_previous ? std::optional<SE3>(*T_c_w_previous * view.T_w_c) : std::nullopt;
+    // A plain SE3 and a flag (GCC 12 warns, wrongly, about an optional's maybe-uninitialised
+    // value inside the loop).
+    const bool have_previous = T_c_w_previous.has_value();
+    const SE3 T_prev_ref = have_previous ? *T_c_w_previous * view.T_w_c : SE3();
     for (std::size_t i = 0; i < n; i += step) {
       const double z_ref = view.depth_m[i];
       if (z_ref < config.min_depth_m || z_ref > config.max_depth_m) continue;
@@ -243,8 +245,8 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       if (z_meas < config.min_depth_m || z_meas > config.max_depth_m) continue;
       const double z_proj = p_cur.z();
       int r = config.window_radius_px;
-      if (T_prev_ref) {
-        const Vec3d p_prev = *T_prev_ref * p_ref;
+      if (have_previous) {
+        const Vec3d p_prev = T_prev_ref * p_ref;
         if (p_prev.z() > config.min_depth_m) {
           const double motion = (camera.project(p_prev) - uv).norm();
           motion_px.push_back(static_cast<float>(motion));
