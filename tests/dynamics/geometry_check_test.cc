@@ -29,6 +29,13 @@ struct Box {
 };
 constexpr double kNoFloor = 1e9;
 
+// The room corner of the noisy-scene tests: a desk and a cabinet in front of the wall, on the
+// floor y = kRoomFloorY.
+constexpr double kRoomFloorY = 0.9;
+std::vector<Box> room_furniture() {
+  return {{-0.7, 0.3, 0.15, 0.9, 2.2}, {0.6, 1.3, -0.6, 0.9, 2.9}};
+}
+
 cv::Mat render_depth(const camera::PinholeCamera& cam, const SE3& T_w_c, double wall_z,
                      const std::vector<Box>& boxes, double floor_y = kNoFloor,
                      cv::Mat* cos_incidence = nullptr) {
@@ -148,8 +155,8 @@ TEST(GeometryCheck, StaticSceneGivesAnEmptyMask) {
 // surfaces, no window, back-check that accepted on no evidence) marked about 12 % of such frames.
 TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
   const auto cam = test_camera();
-  const double floor_y = 0.9;
-  const std::vector<Box> furniture = {{-0.7, 0.3, 0.15, 0.9, 2.2}, {0.6, 1.3, -0.6, 0.9, 2.9}};
+  const double floor_y = kRoomFloorY;
+  const std::vector<Box> furniture = room_furniture();
   const std::vector<SE3> keyframes = {
       SE3(), SE3(Mat3d(Eigen::AngleAxisd(0.06, Vec3d::UnitY())), Vec3d(-0.12, 0.02, 0.05)),
       SE3(Mat3d(Eigen::AngleAxisd(-0.05, Vec3d::UnitX())), Vec3d(0.1, -0.05, -0.1))};
@@ -178,8 +185,8 @@ TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
 // grow into most of the frame; with it the frame gets no geometry mask.
 TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
   const auto cam = test_camera();
-  const double floor_y = 0.9;
-  const std::vector<Box> furniture = {{-0.7, 0.3, 0.15, 0.9, 2.2}, {0.6, 1.3, -0.6, 0.9, 2.9}};
+  const double floor_y = kRoomFloorY;
+  const std::vector<Box> furniture = room_furniture();
   const SE3 T_w_ref;
   const cv::Mat ref_depth = noisy_depth(cam, T_w_ref, 3.5, furniture, floor_y, 3);
   const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.04, Vec3d::UnitY())), Vec3d(0.08, 0.0, 0.1));
@@ -210,8 +217,8 @@ TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
 // (motion_window_gain) absorb it, and a person who walked in front is still found.
 TEST(GeometryCheck, RgbDepthTimeOffsetOnFastMotionIsNotTakenForMotion) {
   const auto cam = test_camera();
-  const double floor_y = 0.9;
-  const std::vector<Box> furniture = {{-0.7, 0.3, 0.15, 0.9, 2.2}, {0.6, 1.3, -0.6, 0.9, 2.9}};
+  const double floor_y = kRoomFloorY;
+  const std::vector<Box> furniture = room_furniture();
   const SE3 T_w_ref;
   const cv::Mat ref_depth = noisy_depth(cam, T_w_ref, 3.5, furniture, floor_y, 3);
   const std::vector<ReferenceView> refs = {reference_from(cam, T_w_ref, ref_depth, 1000, 7)};
