@@ -4,6 +4,7 @@
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
+#include "ddl/dynamics/mask_depth_trim.h"
 #include "ddl/dynamics/mask_fusion.h"
 
 namespace ddl::pipeline {
@@ -23,11 +24,13 @@ void DynamicConfig::validate() const {
   }
   if (enabled && use_segmentation) segmentation.validate();
   if (enabled && use_geometry) geometry.validate();
+  if (enabled && use_segmentation) memory.validate();
+  if (enabled && use_segmentation && depth_trim.enabled) depth_trim.validate();
 }
 
 DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::PinholeCamera& camera,
                                  const std::string& shared_dir)
-    : config_(config), camera_(camera) {
+    : config_(config), camera_(camera), memory_(config.memory, camera) {
   if (!config_.enabled || !config_.use_segmentation) return;
   try {
     segmenter_ = segmentation::make_segmenter(config_.segmentation, shared_dir);
@@ -56,13 +59,20 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
   // last_cnn_mask_ never shares its buffer with a published mask, which goes on to tracking and
   // the dense thread: OpenCV's reference counts (inside libopencv_core) are invisible to
   // ThreadSanitizer, so a shared buffer freed here after they read it shows up as a race.
+  // Both masks are cut to their regions' depth in this frame (the spill of the upsampled mask,
+  // and of the growth of a reused one, onto the background behind a person).
+  const auto trimmed = [&](const cv::Mat& mask) {
+    return config_.depth_trim.enabled && !frame.depth_m.empty()
+               ? dynamics::trim_mask_by_depth(mask, frame.depth_m, config_.depth_trim)
+               : mask;
+  };
   if (reuse) {
-    out.mask =
-        dynamics::feature_exclusion_mask(last_cnn_mask_, config_.segmentation_reuse_dilation_px);
-    if (out.mask.data == last_cnn_mask_.data) out.mask = last_cnn_mask_.clone();  // no growth
+    out.mask = trimmed(
+        dynamics::feature_exclusion_mask(last_cnn_mask_, config_.segmentation_reuse_dilation_px));
+    if (out.mask.data == last_cnn_mask_.data) out.mask = last_cnn_mask_.clone();  // unchanged
     out.reused = true;
   } else {
-    out.mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+    out.mask = trimmed(segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask);
     last_cnn_mask_ = out.mask.clone();
     last_cnn_index_ = frame.index;
   }
@@ -101,10 +111,27 @@ cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {
   return dynamics::feature_exclusion_mask(mask, config_.feature_border_px);
 }
 
+bool DynamicFrontEnd::memory_enabled() const {
+  return config_.enabled && config_.use_segmentation && config_.memory.enabled && segmenter_;
+}
+
+cv::Mat DynamicFrontEnd::memory_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                                     dynamics::DynamicMemoryStats* stats) {
+  if (!memory_enabled()) return {};
+  return memory_.recall(frame.index, T_c_w, frame.depth_m, frame.rgb, stats);
+}
+
+void DynamicFrontEnd::remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c,
+                                        const CnnMask& cnn) {
+  if (!memory_enabled() || cnn.reused || cnn.mask.empty()) return;
+  memory_.remember(frame.index, T_w_c, cnn.mask, frame.depth_m, frame.rgb);
+}
+
 void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
-                                   const cv::Mat& geometry_exclusion) const {
-  masks.combined = dynamics::combine_masks(masks.cnn, masks.geometry);
-  masks.exclusion = dynamics::combine_masks(cnn_exclusion, geometry_exclusion);
+                                   const cv::Mat& moved_exclusion) const {
+  masks.combined =
+      dynamics::combine_masks(dynamics::combine_masks(masks.cnn, masks.geometry), masks.memory);
+  masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }
 
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m) {

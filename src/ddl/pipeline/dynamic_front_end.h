@@ -16,6 +16,7 @@
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
+#include "ddl/dynamics/dynamic_memory.h"
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/io/rgbd_frame.h"
 #include "ddl/map/keyframe.h"
@@ -34,10 +35,12 @@ struct CnnMask {
 struct DynamicMasks {
   cv::Mat cnn;        // CV_8UC1 255 = dynamic class (empty when segmentation is off)
   cv::Mat geometry;   // CV_8UC1 255 = moved according to the geometry check (may be empty)
-  cv::Mat combined;   // union (empty when both are)
+  cv::Mat memory;     // CV_8UC1 255 = where a recent CNN detection still is (may be empty)
+  cv::Mat combined;   // union of the three (empty when all are)
   cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
                       // (CNN part before ORB extraction, geometry part after the low-cost pose)
   dynamics::GeometryCheckStats geometry_stats;
+  dynamics::DynamicMemoryStats memory_stats;
   double segmentation_ms = 0.0;
   double geometry_ms = 0.0;
 };
@@ -67,10 +70,25 @@ class DynamicFrontEnd {
   /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
   cv::Mat exclusion_mask(const cv::Mat& mask) const;
 
-  /// The union of the CNN and geometry masks, and the exclusion mask as the union of their
-  /// exclusion masks (dilation distributes over union, so this is the union grown by the border).
+  /// Whether recent CNN detections are remembered (dynamic.memory.enabled with a segmenter).
+  bool memory_enabled() const;
+
+  /// Pixels of the frame at pose T_c_w where a dynamic surface found by the CNN in the last
+  /// dynamic.memory.max_age_frames frames still is (dynamics::DynamicMemory; empty when off).
+  cv::Mat memory_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                      dynamics::DynamicMemoryStats* stats);
+
+  /// Remembers the frame's CNN mask at its tracked pose T_w_c; reused masks are not remembered.
+  void remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c, const CnnMask& cnn);
+
+  /// Forgets the remembered detections (map reset).
+  void forget_dynamic_surfaces() { memory_.clear(); }
+
+  /// The union of the CNN, geometry and memory masks, and the exclusion mask as the union of the
+  /// CNN exclusion and `moved_exclusion` (the geometry and memory masks grown by the border;
+  /// dilation distributes over union, so this is the union grown by the border).
   void finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
-                    const cv::Mat& geometry_exclusion) const;
+                    const cv::Mat& moved_exclusion) const;
 
   /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
   void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m);
@@ -83,6 +101,7 @@ class DynamicFrontEnd {
   std::optional<std::size_t> last_cnn_index_;
   std::mutex cache_mutex_;
   std::map<map::KeyFrameId, cv::Mat> depth_cache_;
+  dynamics::DynamicMemory memory_;  // tracking thread only
 };
 
 }  // namespace ddl::pipeline

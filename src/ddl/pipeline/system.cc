@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/dynamics/mask_fusion.h"
 
 namespace ddl::pipeline {
 
@@ -47,7 +48,10 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   dense_config.threaded = config_.mode == RunMode::kThreaded;
   dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
   if (config_.save_masks && !config_.output_dir.empty()) {
-    std::filesystem::create_directories(std::filesystem::path(config_.output_dir) / "masks");
+    for (const char* part : {"cnn", "geometry", "memory"}) {
+      std::filesystem::create_directories(std::filesystem::path(config_.output_dir) / "masks" /
+                                          part);
+    }
   }
   if (config_.mode == RunMode::kThreaded) {
     mapping_queue_ =
@@ -92,7 +96,11 @@ CnnMask System::segment(const io::RgbdFrame& frame) {
 
 cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
                                        DynamicMasks& masks) {
-  if (!config_.dynamic.use_geometry || !last_reference_ || last_reference_->is_bad()) return {};
+  const bool use_memory = dynamic_->memory_enabled();
+  if ((!config_.dynamic.use_geometry && !use_memory) || !last_reference_ ||
+      last_reference_->is_bad()) {
+    return {};
+  }
   const Stopwatch watch;
   std::optional<SE3> T_c_w = tracker_->low_cost_pose(current);
   timings_.record("low_cost_tracking", watch.elapsed_ms());
@@ -103,24 +111,33 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     if (!T_c_w) return {};
     ++stats_.geometry_checks_predicted;
   }
-  // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
-  // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
-  const Stopwatch geometry_watch;
-  std::vector<map::KeyFramePtr> references{last_reference_};
-  for (auto& kf : last_reference_->best_covisibles(
-           static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
-    references.push_back(std::move(kf));
+  if (config_.dynamic.use_geometry) {
+    // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
+    // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
+    const Stopwatch geometry_watch;
+    std::vector<map::KeyFramePtr> references{last_reference_};
+    for (auto& kf : last_reference_->best_covisibles(
+             static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
+      references.push_back(std::move(kf));
+    }
+    masks.geometry =
+        dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);
+    const dynamics::GeometryCheckStats& g = masks.geometry_stats;
+    if (g.implausible) ++stats_.geometry_checks_implausible;
+    spdlog::debug("frame {}: geometry check tested {} points, {} seeds, motion {:.1f} px{}",
+                  frame.index, g.points_tested - g.points_skipped_parallax, g.points_dynamic,
+                  g.median_motion_px, g.implausible ? " (implausible: no mask)" : "");
+    masks.geometry_ms = geometry_watch.elapsed_ms();
+    timings_.record("geometry_check", masks.geometry_ms);
   }
-  masks.geometry =
-      dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);
-  const dynamics::GeometryCheckStats& g = masks.geometry_stats;
-  if (g.implausible) ++stats_.geometry_checks_implausible;
-  spdlog::debug("frame {}: geometry check tested {} points, {} seeds, motion {:.1f} px{}",
-                frame.index, g.points_tested - g.points_skipped_parallax, g.points_dynamic,
-                g.median_motion_px, g.implausible ? " (implausible: no mask)" : "");
-  cv::Mat exclusion = dynamic_->exclusion_mask(masks.geometry);
-  masks.geometry_ms = geometry_watch.elapsed_ms();
-  timings_.record("geometry_check", masks.geometry_ms);
+  if (use_memory) {
+    // Where people the CNN found in the last frames still are (it misses those cut by the border).
+    const Stopwatch memory_watch;
+    masks.memory = dynamic_->memory_mask(frame, *T_c_w, &masks.memory_stats);
+    timings_.record("dynamic_memory", memory_watch.elapsed_ms());
+  }
+  cv::Mat exclusion =
+      dynamic_->exclusion_mask(dynamics::combine_masks(masks.geometry, masks.memory));
   const Stopwatch drop_watch;
   tracker_->exclude_features(current, exclusion);
   timings_.record("geometry_feature_removal", drop_watch.elapsed_ms());
@@ -175,6 +192,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     velocity_ = last_T_c_w_ ? std::optional<SE3>(T_c_w * last_T_c_w_->inverse()) : std::nullopt;
     last_T_c_w_ = T_c_w;
     last_reference_ = result.reference_keyframe;
+    if (cnn) dynamic_->remember_cnn_mask(frame, *result.T_w_c, {masks.cnn, 0.0, cnn->reused});
   } else {
     last_T_c_w_.reset();
     velocity_.reset();
@@ -187,15 +205,25 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     // and loop closing forget their lists and drop keyframes made for the old map (still queued
     // in threaded mode): every keyframe created from now on has an id above the one reserved here.
     last_reference_.reset();
+    dynamic_->forget_dynamic_surfaces();
     const map::KeyFrameId first_valid_keyframe = map_->next_keyframe_id();
     mapper_->request_reset(first_valid_keyframe);
     loop_closer_->request_reset(first_valid_keyframe);
   }
 
   if (config_.save_masks && !config_.output_dir.empty() && !outcome.masks.combined.empty()) {
-    const auto path = std::filesystem::path(config_.output_dir) / "masks" /
-                      fmt::format("{:.6f}.png", frame.timestamp_s);
-    cv::imwrite(path.string(), outcome.masks.combined);
+    const auto dir = std::filesystem::path(config_.output_dir) / "masks";
+    const std::string name = fmt::format("{:.6f}.png", frame.timestamp_s);
+    cv::imwrite((dir / name).string(), outcome.masks.combined);
+    // The parts, where they marked anything (an empty part is written as no file).
+    const std::pair<const char*, const cv::Mat*> parts[] = {{"cnn", &outcome.masks.cnn},
+                                                            {"geometry", &outcome.masks.geometry},
+                                                            {"memory", &outcome.masks.memory}};
+    for (const auto& [part, mask] : parts) {
+      if (!mask->empty() && cv::countNonZero(*mask) > 0) {
+        cv::imwrite((dir / part / name).string(), *mask);
+      }
+    }
   }
 
   if (result.new_keyframe) {

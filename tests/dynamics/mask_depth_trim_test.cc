@@ -1,0 +1,79 @@
+#include "ddl/dynamics/mask_depth_trim.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "ddl/core/error.h"
+#include "ddl/dynamics/mask_fusion.h"
+
+namespace ddl::dynamics {
+namespace {
+
+// A wall at 3 m with a person (a 120x300 px rectangle) at 2 m, and the person's mask.
+struct Scene {
+  cv::Mat depth_m{480, 640, CV_32FC1, cv::Scalar(3.0f)};
+  cv::Mat person{480, 640, CV_8UC1, cv::Scalar(0)};
+  cv::Rect body{260, 100, 120, 300};
+  Scene() {
+    depth_m(body).setTo(2.0f);
+    person(body).setTo(255);
+  }
+};
+
+TEST(MaskDepthTrim, SpillOntoTheWallBehindIsCutAndThePersonKept) {
+  const Scene scene;
+  const cv::Mat spilled = feature_exclusion_mask(scene.person, 6);  // the upsampled CNN edge
+  const cv::Mat before = spilled.clone();
+  const cv::Mat trimmed = trim_mask_by_depth(spilled, scene.depth_m, DepthTrimConfig{});
+  EXPECT_EQ(cv::norm(spilled, before, cv::NORM_INF), 0.0) << "the input mask was changed";
+  const MaskScore raw = score_mask(spilled, scene.person);
+  const MaskScore cut = score_mask(trimmed, scene.person);
+  EXPECT_LT(raw.precision, 0.95);
+  EXPECT_EQ(cut.recall, 1.0);
+  EXPECT_EQ(cut.precision, 1.0);
+}
+
+TEST(MaskDepthTrim, NearerPartsAndPixelsWithoutDepthAreKept) {
+  Scene scene;
+  const cv::Rect arm(200, 200, 60, 20);  // an arm reaching towards the camera
+  scene.depth_m(arm).setTo(1.4f);
+  scene.person(arm).setTo(255);
+  const cv::Rect dropout(300, 150, 10, 10);  // no depth measured inside the body
+  scene.depth_m(dropout).setTo(0.0f);
+  const cv::Mat trimmed = trim_mask_by_depth(scene.person, scene.depth_m, DepthTrimConfig{});
+  EXPECT_EQ(cv::countNonZero(trimmed != scene.person), 0);
+}
+
+TEST(MaskDepthTrim, EachRegionIsJudgedByItsOwnDepth) {
+  Scene scene;
+  // A second person at 2.8 m, just in front of the wall, with a spilled mask of its own: its
+  // band reaches past the wall (2.8 + 0.4 > 3), so nothing of it is cut, while the spill of the
+  // first person is.
+  const cv::Rect far_body(40, 100, 80, 200);
+  scene.depth_m(far_body).setTo(2.8f);
+  scene.person(far_body).setTo(255);
+  const cv::Mat spilled = feature_exclusion_mask(scene.person, 6);
+  const cv::Mat trimmed = trim_mask_by_depth(spilled, scene.depth_m, DepthTrimConfig{});
+  cv::Mat far_region = cv::Mat::zeros(spilled.size(), CV_8UC1);
+  far_region(cv::Rect(20, 80, 120, 240)).setTo(255);
+  EXPECT_EQ(cv::countNonZero((trimmed & far_region) != (spilled & far_region)), 0);
+  const cv::Mat near_spill = spilled & ~scene.person & ~far_region;
+  EXPECT_GT(cv::countNonZero(near_spill), 1000);
+  EXPECT_EQ(cv::countNonZero(trimmed & near_spill), 0);
+}
+
+TEST(MaskDepthTrim, ConfigErrorsNameTheKey) {
+  DepthTrimConfig config;
+  config.band_m = 0.0;
+  try {
+    config.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("dynamic.depth_trim.band_m"), std::string::npos);
+  }
+  EXPECT_NO_THROW(DepthTrimConfig{}.validate());
+}
+
+}  // namespace
+}  // namespace ddl::dynamics
