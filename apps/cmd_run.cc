@@ -200,7 +200,9 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-loop", args->no_loop, "Disable loop closing");
   cmd->add_flag("--no-octomap", args->no_octomap, "Do not build the octree map");
   cmd->add_flag("--no-inpainting", args->no_inpainting, "Do not repair keyframes");
-  cmd->add_flag("--save-masks", args->save_masks, "Write the dynamic masks to <out>/masks/");
+  cmd->add_flag("--save-masks", args->save_masks,
+                "Write the dynamic masks to <out>/masks/ (combined; the CNN, geometry and memory "
+                "parts in subfolders)");
   cmd->add_flag("--save-inpainted", args->save_inpainted,
                 "Write repaired keyframes to <out>/inpainted/");
   cmd->add_flag("--no-eval", args->no_eval, "Skip the evaluation against groundtruth.txt");

@@ -34,8 +34,10 @@ struct View {
 const cv::Vec3b kWallColour(200, 200, 200);
 const cv::Vec3b kPersonColour(40, 60, 200);
 
-View render(const camera::PinholeCamera& cam, const SE3& T_w_c, const std::optional<Person>& person) {
-  View view{cv::Mat(cam.height, cam.width, CV_32FC1), cv::Mat::zeros(cam.height, cam.width, CV_8UC1),
+View render(const camera::PinholeCamera& cam, const SE3& T_w_c,
+            const std::optional<Person>& person) {
+  View view{cv::Mat(cam.height, cam.width, CV_32FC1),
+            cv::Mat::zeros(cam.height, cam.width, CV_8UC1),
             cv::Mat(cam.height, cam.width, CV_8UC3, cv::Scalar(kWallColour))};
   const Vec3d o = T_w_c.translation();
   const SE3 T_c_w = T_w_c.inverse();

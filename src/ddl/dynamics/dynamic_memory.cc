@@ -70,10 +70,9 @@ void DynamicMemory::remember(std::size_t frame_index, const SE3& T_w_c, const cv
       if (!(z >= config_.min_depth_m && z <= config_.max_depth_m)) continue;
       const Vec3d p_w = R * camera_.unproject(u, v, z) + t;
       const cv::Vec3b c = colour ? bgr.at<cv::Vec3b>(v, u) : cv::Vec3b();
-      snapshot.points.push_back({static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
-                                 static_cast<float>(p_w.z()),
-                                 static_cast<float>(0.5 * stride * z / camera_.fx), c[0], c[1],
-                                 c[2], colour});
+      snapshot.points.push_back(
+          {static_cast<float>(p_w.x()), static_cast<float>(p_w.y()), static_cast<float>(p_w.z()),
+           static_cast<float>(0.5 * stride * z / camera_.fx), c[0], c[1], c[2], colour});
     }
   }
   if (!snapshots_.empty() && snapshots_.back().frame_index >= frame_index) snapshots_.clear();
@@ -88,8 +87,8 @@ bool DynamicMemory::colour_still_there(const Point& point, int u0, int v0,
     const auto* row = bgr.ptr<cv::Vec3b>(v);
     for (int u = std::max(0, u0 - 1); u <= std::min(bgr.cols - 1, u0 + 1); ++u) {
       const cv::Vec3b& c = row[u];
-      const int difference = std::abs(c[0] - point.b) + std::abs(c[1] - point.g) +
-                             std::abs(c[2] - point.r);
+      const int difference =
+          std::abs(c[0] - point.b) + std::abs(c[1] - point.g) + std::abs(c[2] - point.r);
       if (difference <= config_.colour_tolerance) return true;
     }
   }

@@ -28,18 +28,18 @@
 namespace ddl::dynamics {
 
 struct DynamicMemoryConfig {
-  bool enabled = true;                        // false = the CNN and geometry masks only
-  int max_age_frames = 60;                    // forget what was seen this many frames ago
-  int sample_stride_px = 4;                   // remember one mask pixel per stride x stride cell
+  bool enabled = true;       // false = the CNN and geometry masks only
+  int max_age_frames = 60;   // forget what was seen this many frames ago
+  int sample_stride_px = 4;  // remember one mask pixel per stride x stride cell
   /// The CNN mask is eroded by this much before it is remembered: its upsampled edge spills onto
   /// the background next to a person, and remembered background would be re-marked as long as it
   /// is remembered (static, so its depth always agrees).
   int erode_px = 4;
-  double depth_tolerance_m = 0.05;            // agreement at z = 0 (people move meanwhile)
-  double depth_tolerance_quadratic = 0.01;    // grows by this times z^2, like the depth noise
-  double min_depth_m = 0.3;                   // ignore depths closer than this
-  double max_depth_m = 6.0;                   // and farther than this
-  int max_splat_radius_px = 8;                // cap of the square a remembered point covers
+  double depth_tolerance_m = 0.05;          // agreement at z = 0 (people move meanwhile)
+  double depth_tolerance_quadratic = 0.01;  // grows by this times z^2, like the depth noise
+  double min_depth_m = 0.3;                 // ignore depths closer than this
+  double max_depth_m = 6.0;                 // and farther than this
+  int max_splat_radius_px = 8;              // cap of the square a remembered point covers
   /// Colour test: a remembered point marks pixels only when a pixel within 1 px of where it
   /// projects has its colour (sum of |B|, |G|, |R| differences at most this). A person who stood
   /// right in front of a bookshelf leaves the shelf at the remembered depth, but not in the
@@ -60,7 +60,7 @@ struct DynamicMemoryConfig {
 };
 
 struct DynamicMemoryStats {
-  int points_projected = 0;  // remembered points in front of the camera and in the image
+  int points_projected = 0;        // remembered points in front of the camera and in the image
   int points_colour_rejected = 0;  // of those, the ones whose colour is not there any more
   int pixels_marked = 0;
 };
@@ -88,8 +88,8 @@ class DynamicMemory {
 
  private:
   struct Point {
-    float x, y, z;     // world frame
-    float reach_m;     // half the sample spacing where it was seen
+    float x, y, z;  // world frame
+    float reach_m;  // half the sample spacing where it was seen
     std::uint8_t b, g, r;
     bool has_colour;
   };

@@ -59,9 +59,9 @@ cv::Mat trim_mask_by_depth(const cv::Mat& mask, const cv::Mat& depth_m,
   // Deepest depth kept per region; infinity = keep the whole region (no depth to judge by).
   std::vector<float> limit(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
   for (std::size_t i = 1; i < limit.size(); ++i) {
-    std::vector<float>& samples =
-        static_cast<int>(core_depths[i].size()) >= config.min_core_samples ? core_depths[i]
-                                                                            : all_depths[i];
+    std::vector<float>& samples = static_cast<int>(core_depths[i].size()) >= config.min_core_samples
+                                      ? core_depths[i]
+                                      : all_depths[i];
     if (samples.empty()) continue;
     limit[i] = median_of(samples) + static_cast<float>(config.band_m);
   }

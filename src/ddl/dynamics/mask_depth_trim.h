@@ -15,10 +15,10 @@
 namespace ddl::dynamics {
 
 struct DepthTrimConfig {
-  bool enabled = true;          // false = the CNN mask as the network gives it
-  double band_m = 0.4;          // keep pixels up to this much deeper than the region's median
-  int core_erode_px = 4;        // the median is taken over the region eroded by this much
-  int min_core_samples = 20;    // fewer valid core depths: the whole region's depths are used
+  bool enabled = true;        // false = the CNN mask as the network gives it
+  double band_m = 0.4;        // keep pixels up to this much deeper than the region's median
+  int core_erode_px = 4;      // the median is taken over the region eroded by this much
+  int min_core_samples = 20;  // fewer valid core depths: the whole region's depths are used
 
   /// Throws ddl::ConfigError naming "dynamic.depth_trim.<field>".
   void validate() const;

@@ -60,7 +60,8 @@ struct SystemConfig {
   std::string shared_dir = "../shared";  // where relative model paths are looked up
   std::string output_dir;                // where --save-masks / --save-inpainted write
 
-  bool save_masks = false;  // write <output_dir>/masks/<stamp>.png (combined dynamic mask)
+  bool save_masks = false;  // write <output_dir>/masks/<stamp>.png (combined dynamic mask; parts in
+                            // masks/cnn|geometry|memory/)
 
   /// Throws ddl::ConfigError naming the key.
   void validate() const;
