@@ -23,6 +23,7 @@ void InpaintingConfig::validate() const {
   if (!(max_depth_m > 0)) fail("max_depth_m", "must be > 0");
   if (max_hole_area_px < 0) fail("max_hole_area_px", "must be >= 0");
   if (source_stride_px < 1) fail("source_stride_px", "must be >= 1");
+  if (see_through_votes < 0) fail("see_through_votes", "must be >= 0");
 }
 
 namespace {
@@ -84,6 +85,52 @@ void resample_colour(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& 
         const double value =
             (1 - b) * ((1 - a) * c00[k] + a * c01[k]) + b * ((1 - a) * c10[k] + a * c11[k]);
         crow[x][k] = cv::saturate_cast<std::uint8_t>(value);
+      }
+    }
+  }
+}
+
+/// Multi-view check of the filled pixels: a filled point that at least see_through_votes other
+/// sources saw through (their observed, unexcluded depth at its projection lies farther than it
+/// by more than the tolerance) was empty space when they were taken, so it is a piece of a moving
+/// object that its source's mask missed; the pixel is left unfilled (the original frame's values
+/// come back). Static background is never seen through, except across depth edges within pose
+/// and depth error, hence more than one vote.
+void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& winner,
+                         const cv::Mat& bgr, const cv::Mat& depth_m, const SE3& T_c_w,
+                         const std::vector<SourceView>& sources, std::size_t count,
+                         const camera::PinholeCamera& camera, const InpaintingConfig& config) {
+  std::vector<SE3> T_src_cur;
+  for (std::size_t s = 0; s < count; ++s) {
+    T_src_cur.push_back(sources[s].T_w_c.inverse() * T_c_w.inverse());
+  }
+  for (int y = 0; y < out.filled.rows; ++y) {
+    std::uint8_t* frow = out.filled.ptr(y);
+    const float* zrow = zbuf.ptr<float>(y);
+    const std::uint8_t* wrow = winner.ptr(y);
+    for (int x = 0; x < out.filled.cols; ++x) {
+      if (frow[x] == 0) continue;
+      const double z = zrow[x];
+      const Vec3d p_cur((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
+      int votes = 0;
+      for (std::size_t s = 0; s < count && votes < config.see_through_votes; ++s) {
+        if (s == wrow[x]) continue;
+        const SourceView& src = sources[s];
+        const Vec3d p = T_src_cur[s] * p_cur;
+        if (p.z() < kMinSampleDepth) continue;
+        const int u = cvRound(camera.fx * p.x() / p.z() + camera.cx);
+        const int v = cvRound(camera.fy * p.y() / p.z() + camera.cy);
+        if (u < 0 || v < 0 || u >= src.depth_m.cols || v >= src.depth_m.rows) continue;
+        if (!src.exclude_mask.empty() && src.exclude_mask.at<std::uint8_t>(v, u) != 0) continue;
+        if (!src.repaired_mask.empty() && src.repaired_mask.at<std::uint8_t>(v, u) != 0) continue;
+        const float d = src.depth_m.at<float>(v, u);
+        const double tol = config.depth_tolerance_m + config.depth_tolerance_rel * p.z();
+        if (d > 0.0f && d > p.z() + tol) ++votes;
+      }
+      if (votes >= config.see_through_votes) {
+        frow[x] = 0;
+        out.bgr.at<cv::Vec3b>(y, x) = bgr.at<cv::Vec3b>(y, x);
+        out.depth_m.at<float>(y, x) = depth_m.at<float>(y, x);
       }
     }
   }
@@ -229,6 +276,9 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
         }
       }
     }
+  }
+  if (config.see_through_votes > 0) {
+    reject_seen_through(out, zbuf, winner, bgr, depth_m, T_c_w, sources, count, camera, config);
   }
   out.filled = out.filled != 0;
   out.filled_pixels = cv::countNonZero(out.filled);

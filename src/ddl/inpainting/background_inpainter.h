@@ -47,6 +47,10 @@ struct InpaintingConfig {
   /// fill what no observed sample reached. Otherwise a piece of a person that one repair let
   /// through is copied from repair to repair and the error accumulates over the sequence.
   bool observed_first = true;
+  /// Multi-view check: a filled pixel whose point at least this many other sources saw through
+  /// (they saw farther along its ray, where they observed) is a piece of a moving object one
+  /// source's mask missed, and is left unfilled. 0 = off.
+  int see_through_votes = 2;
 
   /// Throws ddl::ConfigError naming "inpainting.<field>".
   void validate() const;

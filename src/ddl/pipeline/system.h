@@ -107,8 +107,9 @@ class System {
   void mapping_worker();
   void loop_worker();
   void handle_keyframe_inline(const map::KeyFramePtr& keyframe);
-  /// Geometry check at the low-cost pose of `current` (filling masks.geometry) and removal of
-  /// the features in its exclusion mask, which it returns (empty when the check did not run).
+  /// Geometry check and dynamic-memory recall at the low-cost pose of `current` (filling
+  /// masks.geometry and masks.memory) and removal of the features in their exclusion mask, which
+  /// it returns (empty when neither ran).
   cv::Mat remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
                                  DynamicMasks& masks);
   std::optional<SE3> constant_velocity_pose() const;
