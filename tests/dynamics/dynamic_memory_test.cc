@@ -6,18 +6,10 @@
 
 #include "ddl/core/error.h"
 #include "ddl/dynamics/mask_fusion.h"
+#include "ddl/synthetic/sequence.h"
 
 namespace ddl::dynamics {
 namespace {
-
-camera::PinholeCamera test_camera() {
-  camera::PinholeCamera c;
-  c.fx = 535.4;
-  c.fy = 539.2;
-  c.cx = 320.1;
-  c.cy = 247.6;
-  return c;
-}
 
 // A wall at world z = 3 m and a "person": the rectangle [x0, x1] x [y0, y1] at world z = 2 m.
 struct Person {
@@ -67,7 +59,7 @@ SE3 camera_at(double x, double yaw_deg) {
 }
 
 TEST(DynamicMemory, PersonCutByTheImageBorderIsRecalledFromAnEarlierFullView) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   DynamicMemoryConfig config;
   config.erode_px = 0;        // the mask below is exact: no spill to erode
   config.recall_band_px = 0;  // recall everywhere: the cut person reaches beyond the band
@@ -92,7 +84,7 @@ TEST(DynamicMemory, PersonCutByTheImageBorderIsRecalledFromAnEarlierFullView) {
 }
 
 TEST(DynamicMemory, PlaceThePersonLeftIsNotRecalled) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   DynamicMemory memory(DynamicMemoryConfig{}, cam);
   const SE3 T_w_c = camera_at(0.0, 0.0);
   const View before = render(cam, T_w_c, Person{});
@@ -110,7 +102,7 @@ TEST(DynamicMemory, PlaceThePersonLeftIsNotRecalled) {
 }
 
 TEST(DynamicMemory, WallAPersonStoodAgainstIsNotRecalledOnceTheyLeft) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   const SE3 T_w_c = camera_at(0.0, 0.0);
   Person against_wall;
   against_wall.z = kWallZ - 0.05;  // within the depth tolerance of the wall behind
@@ -136,7 +128,7 @@ TEST(DynamicMemory, WallAPersonStoodAgainstIsNotRecalledOnceTheyLeft) {
 }
 
 TEST(DynamicMemory, DetectionsOlderThanMaxAgeAreForgotten) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   DynamicMemoryConfig config;
   config.max_age_frames = 30;
   config.recall_band_px = 0;  // the person stands in the middle of the image
@@ -150,7 +142,7 @@ TEST(DynamicMemory, DetectionsOlderThanMaxAgeAreForgotten) {
 }
 
 TEST(DynamicMemory, MaskSpillOntoTheBackgroundIsNotRemembered) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   const SE3 T_w_c = camera_at(0.0, 0.0);
   const View view = render(cam, T_w_c, Person{});
   // The CNN's upsampled mask spills 3 px onto the wall around the person.
@@ -180,7 +172,7 @@ TEST(DynamicMemory, MaskSpillOntoTheBackgroundIsNotRemembered) {
 }
 
 TEST(DynamicMemory, RecallsOnlyNearTheImageBorderByDefault) {
-  const camera::PinholeCamera cam = test_camera();
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
   const SE3 T_w_a = camera_at(0.0, 0.0);
   const View a = render(cam, T_w_a, Person{});
   DynamicMemoryConfig config;

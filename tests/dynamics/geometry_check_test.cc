@@ -7,18 +7,10 @@
 #include "ddl/core/error.h"
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/synthetic/depth_model.h"
+#include "ddl/synthetic/sequence.h"
 
 namespace ddl::dynamics {
 namespace {
-
-camera::PinholeCamera test_camera() {
-  camera::PinholeCamera c;
-  c.fx = 535.4;
-  c.fy = 539.2;
-  c.cx = 320.1;
-  c.cy = 247.6;
-  return c;
-}
 
 // Depth image of a fronto-parallel wall at wall_z (world z, camera looking along +z from
 // T_w_c), with optional boxes [x0,x1]x[y0,y1] at z in world coordinates and an optional floor,
@@ -115,7 +107,7 @@ cv::Mat truth_mask(const cv::Mat& with, const cv::Mat& without) {
 }
 
 TEST(GeometryCheck, FindsAnObjectThatAppearedInFront) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_ref(Mat3d::Identity(), Vec3d(0, 0, 0));
   const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.05, Vec3d::UnitY())), Vec3d(0.1, 0.0, 0.05));
   const cv::Mat ref_depth = render_depth(cam, T_w_ref, 3.0, {});
@@ -136,7 +128,7 @@ TEST(GeometryCheck, FindsAnObjectThatAppearedInFront) {
 }
 
 TEST(GeometryCheck, StaticSceneGivesAnEmptyMask) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_ref;
   const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.1, Vec3d::UnitX())), Vec3d(0.2, -0.1, 0.3));
   const std::vector<Box> table = {{-0.5, 0.5, 0.2, 0.8, 2.2}};
@@ -154,7 +146,7 @@ TEST(GeometryCheck, StaticSceneGivesAnEmptyMask) {
 // leaves): depth edges everywhere, nothing moved. The earlier check (one seed grown over whole
 // surfaces, no window, back-check that accepted on no evidence) marked about 12 % of such frames.
 TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const double floor_y = kRoomFloorY;
   const std::vector<Box> furniture = room_furniture();
   const std::vector<SE3> keyframes = {
@@ -184,7 +176,7 @@ TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
 // time offset does on real data): seeds all over the image. Without the gate (the default) they
 // grow into most of the frame; with it the frame gets no geometry mask.
 TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const double floor_y = kRoomFloorY;
   const std::vector<Box> furniture = room_furniture();
   const SE3 T_w_ref;
@@ -216,7 +208,7 @@ TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
 // that floods the frame with seeds; windows grown by the image motion since the previous frame
 // (motion_window_gain) absorb it, and a person who walked in front is still found.
 TEST(GeometryCheck, RgbDepthTimeOffsetOnFastMotionIsNotTakenForMotion) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const double floor_y = kRoomFloorY;
   const std::vector<Box> furniture = room_furniture();
   const SE3 T_w_ref;
@@ -264,7 +256,7 @@ TEST(GeometryCheck, RgbDepthTimeOffsetOnFastMotionIsNotTakenForMotion) {
 // on the person must not spread over the floor around the feet (same depth, continuous surface),
 // which the keyframes saw as static.
 TEST(GeometryCheck, PersonOnTheFloorIsFoundWithoutTheFloor) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const double floor_y = 0.9;
   const SE3 T_w_ref;
   const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.03, Vec3d::UnitY())), Vec3d(0.05, 0.0, 0.03));
@@ -286,7 +278,7 @@ TEST(GeometryCheck, PersonOnTheFloorIsFoundWithoutTheFloor) {
 
 // Without a depth image the reference cannot confirm a candidate: no seeds from it.
 TEST(GeometryCheck, ReferenceWithoutDepthImageGivesNoSeeds) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_ref;
   const cv::Mat ref_depth = render_depth(cam, T_w_ref, 3.0, {});
   const cv::Mat cur_depth = render_depth(cam, T_w_ref, 3.0, {{-0.3, 0.2, -0.6, 0.9, 1.6}});
@@ -309,7 +301,7 @@ TEST(GeometryCheck, ThresholdGrowsWithTheSquareOfDepth) {
 }
 
 TEST(GeometryCheck, CatchesAMovedObjectOfAStaticClass) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_ref;
   const SE3 T_w_cur(Mat3d::Identity(), Vec3d(0.05, 0, 0));
   const Box book_before{-0.8, -0.5, 0.0, 0.3, 2.0};
@@ -325,7 +317,7 @@ TEST(GeometryCheck, CatchesAMovedObjectOfAStaticClass) {
 }
 
 TEST(GeometryCheck, WideParallaxPointsAreSkipped) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   // Reference 2 m to the side looking at the same wall point: rays differ by more than 30 deg
   // for the points in the middle of the current view.
   const SE3 T_w_ref(Mat3d(Eigen::AngleAxisd(-0.6, Vec3d::UnitY())), Vec3d(2.0, 0, 0));

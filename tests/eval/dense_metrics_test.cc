@@ -5,17 +5,10 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "ddl/synthetic/sequence.h"
+
 namespace ddl::eval {
 namespace {
-
-camera::PinholeCamera test_camera() {
-  camera::PinholeCamera c;
-  c.fx = 535.4;
-  c.fy = 539.2;
-  c.cx = 320.1;
-  c.cy = 247.6;
-  return c;
-}
 
 TEST(DenseMetrics, PsnrOfAPatchWithAKnownError) {
   const cv::Mat background(480, 640, CV_8UC3, cv::Scalar(100, 120, 140));
@@ -112,7 +105,7 @@ TEST(DenseMetrics, DepthErrorMedianSkipsMissingDepth) {
 
 // A wall z = 3 (world = first camera), a "person" mask in the current frame.
 TEST(DenseMetrics, SeenBackgroundNeedsAStaticDepthConsistentEarlierView) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const cv::Mat wall(cam.height, cam.width, CV_32FC1, cv::Scalar(3.0f));
   cv::Mat person = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
   person(cv::Rect(280, 140, 80, 200)).setTo(255);

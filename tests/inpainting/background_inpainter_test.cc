@@ -6,18 +6,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/synthetic/sequence.h"
 
 namespace ddl::inpainting {
 namespace {
-
-camera::PinholeCamera test_camera() {
-  camera::PinholeCamera c;
-  c.fx = 535.4;
-  c.fy = 539.2;
-  c.cx = 320.1;
-  c.cy = 247.6;
-  return c;
-}
 
 // Smooth colour texture on the wall plane z = 3 (world), a function of world x, y.
 cv::Vec3b wall_colour(double x, double y) {
@@ -80,7 +72,7 @@ int grey_pixels(const InpaintingResult& r) {
 }
 
 TEST(Inpainting, FillsThePersonFromAnEarlierKeyframe) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_kf(Mat3d(Eigen::AngleAxisd(0.05, Vec3d::UnitY())), Vec3d(0.4, 0.0, 0.0));
   const SE3 T_w_cur(Mat3d::Identity(), Vec3d(0.0, 0.05, 0.1));
   // The keyframe saw the wall with the person elsewhere (off to the right): its mask excludes it.
@@ -111,7 +103,7 @@ TEST(Inpainting, FillsThePersonFromAnEarlierKeyframe) {
 }
 
 TEST(Inpainting, ExcludedSourcePixelsAreNotUsedAndStayUnfilled) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w(Mat3d::Identity(), Vec3d::Zero());
   View kf = render(cam, T_w, true);
   View cur = render(cam, T_w, true);
@@ -132,7 +124,7 @@ TEST(Inpainting, ExcludedSourcePixelsAreNotUsedAndStayUnfilled) {
 TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
   // The keyframe saw the wall, but a remnant its mask missed (red, 1.0 m away) sits where the
   // current frame's person (1.5 m) is: the current ray is free up to 1.5 m, so the remnant is gone.
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
   const SE3 T_w_cur;
   View kf = render(cam, T_w_kf, false);
@@ -157,7 +149,7 @@ TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
 // so the free-space check cannot reject it); an older keyframe observed the wall there. What was
 // observed wins, so one repair's mistake is not copied into the next.
 TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
   const SE3 T_w_older(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0));
   const SE3 T_w_cur;
@@ -187,7 +179,7 @@ TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
 // the current person's own depth. The background lies behind what the mask covers, so they are
 // rejected (the free-space check alone lets them through: they are not in front).
 TEST(Inpainting, SamplesAtTheMaskedSurfacesOwnDepthAreRejected) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.1, 0.0, 0.0));
   const SE3 T_w_cur;
   const View kf = render(cam, T_w_kf, true);  // unmasked person
@@ -209,7 +201,7 @@ TEST(Inpainting, SamplesAtTheMaskedSurfacesOwnDepthAreRejected) {
 // in front of the wall, like the other walker of a crossing), and two other keyframes saw the wall
 // through the place where it was. It was gone by then, so the multi-view check rejects it.
 TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
   const SE3 T_w_older(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0));
   const SE3 T_w_oldest(Mat3d::Identity(), Vec3d(-0.2, 0.3, 0.0));
@@ -234,13 +226,12 @@ TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
   const View truth = render(cam, T_w_cur, false);
   EXPECT_GT(psnr_over(checked.bgr, truth.bgr, checked.filled), 30.0);
   config.see_through_votes = 0;
-  const auto unchecked =
-      inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_GT(red_pixels(unchecked), 500);
 }
 
 TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   const SE3 T_w;
   View cur = render(cam, T_w, false);
   cv::Mat mask = cv::Mat::zeros(cur.depth.size(), CV_8UC1);

@@ -12,24 +12,16 @@
 #include <tuple>
 
 #include "ddl/core/error.h"
+#include "ddl/synthetic/sequence.h"
 
 namespace ddl::octomap {
 namespace {
 namespace fs = std::filesystem;
 
-camera::PinholeCamera test_camera() {
-  camera::PinholeCamera c;
-  c.fx = 535.4;
-  c.fy = 539.2;
-  c.cx = 320.1;
-  c.cy = 247.6;
-  return c;
-}
-
 // A camera at the origin looking along world +z at a wall z = 3; optionally a person-sized box
 // at z = 1.5 covering x in [-0.3, 0.3], y in [-0.8, 0.8].
 KeyframeScan wall_scan(bool with_person, std::uint64_t id) {
-  const auto cam = test_camera();
+  const auto cam = synthetic::tum3_camera();
   KeyframeScan scan;
   scan.keyframe_id = id;
   scan.bgr = cv::Mat(cam.height, cam.width, CV_8UC3, cv::Scalar(200, 100, 50));
@@ -56,7 +48,7 @@ bool occupied(const ::octomap::OcTree& tree, double x, double y, double z) {
 TEST(OctreeMap, WallIsOccupiedAndSpaceInFrontIsFree) {
   OctreeConfig config;
   config.resolution_m = 0.05;
-  OctreeMap map(config, test_camera());
+  OctreeMap map(config, synthetic::tum3_camera());
   map.integrate(wall_scan(false, 0));
   const auto& tree = map.tree();
   const auto* wall = tree.search(0.0, 0.0, 3.0);
@@ -73,7 +65,7 @@ TEST(OctreeMap, WallIsOccupiedAndSpaceInFrontIsFree) {
 }
 
 TEST(OctreeMap, RayCastingClearsAPersonWhoWalkedAway) {
-  OctreeMap map(OctreeConfig{}, test_camera());
+  OctreeMap map(OctreeConfig{}, synthetic::tum3_camera());
   map.integrate(wall_scan(true, 0));
   ASSERT_TRUE(map.tree().isNodeOccupied(map.tree().search(0.0, 0.0, 1.5)));
   for (int i = 1; i <= 3; ++i) map.integrate(wall_scan(false, static_cast<std::uint64_t>(i)));
@@ -82,7 +74,7 @@ TEST(OctreeMap, RayCastingClearsAPersonWhoWalkedAway) {
 }
 
 TEST(OctreeMap, ExcludedPixelsAreNotInserted) {
-  OctreeMap map(OctreeConfig{}, test_camera());
+  OctreeMap map(OctreeConfig{}, synthetic::tum3_camera());
   KeyframeScan scan = wall_scan(true, 0);
   scan.exclude_mask = scan.depth_m < 2.0f;
   map.integrate(scan);
@@ -91,7 +83,7 @@ TEST(OctreeMap, ExcludedPixelsAreNotInserted) {
 }
 
 TEST(OctreeMap, FilesOpenWithTheOctomapLibrary) {
-  OctreeMap map(OctreeConfig{}, test_camera());
+  OctreeMap map(OctreeConfig{}, synthetic::tum3_camera());
   map.integrate(wall_scan(false, 0));
   const fs::path dir = fs::temp_directory_path() / "ddl_octomap_test";
   fs::create_directories(dir);
