@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct BenchArgs {
   std::vector<std::string> sequences;
   std::string suite;
   std::string output_dir = "out/bench";
+  bool reuse_baseline = false;  // take finished --no-dynamic runs from output_dir
   RunArgs run;  // settings shared by every run (sequence, output_dir and no_dynamic set per run)
 };
 
@@ -105,7 +107,20 @@ json settings_json(const BenchArgs& args, std::size_t sequences) {
           {"config", r.config_path.empty() ? "defaults" : r.config_path},
           {"camera", r.camera.empty() ? "per folder" : r.camera},
           {"segmentation", r.segmentation.empty() ? "from the settings" : r.segmentation},
-          {"sequences", sequences}};
+          {"sequences", sequences},
+          {"reuse_baseline", args.reuse_baseline}};
+}
+
+/// The summary.json of a finished run in `dir` (not interrupted, not failed), if there is one.
+std::optional<json> finished_summary(const fs::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  if (!in) return std::nullopt;
+  json summary = json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (summary.is_discarded() || !summary.is_object() || summary.value("interrupted", true) ||
+      summary.value("failed", true)) {
+    return std::nullopt;
+  }
+  return summary;
 }
 
 int bench(const BenchArgs& args) {
@@ -140,6 +155,14 @@ int bench(const BenchArgs& args) {
       run.sequence = seq.dir;
       run.output_dir = (out_dir / seq.name / column).string();
       run.no_dynamic = !dynamic;
+      if (!dynamic && args.reuse_baseline) {
+        if (std::optional<json> summary = finished_summary(run.output_dir)) {
+          std::fprintf(stderr, "bench [%zu/%zu] %s: reusing %s/summary.json\n", i + 1,
+                       sequences.size(), seq.name.c_str(), run.output_dir.c_str());
+          row.baseline = std::move(*summary);
+          continue;
+        }
+      }
       try {
         const RunResult result = run_sequence_command(run, vocabulary, &stop);
         (dynamic ? row.ours : row.baseline) = result.summary;
@@ -210,6 +233,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--shared-dir", args->run.shared_dir,
                   "Shared data folder (models); default $DDL_SHARED_DIR or ../shared");
   cmd->add_flag("--no-loop", args->run.no_loop, "Disable loop closing in every run");
+  cmd->add_flag("--reuse-baseline", args->reuse_baseline,
+                "Take the --no-dynamic runs already finished in the output folder "
+                "(<out>/<seq>/no_dynamic/summary.json) instead of running them again; they do not "
+                "depend on the dynamic-removal settings, but the other options must match");
   cmd->add_flag("--no-octomap", args->run.no_octomap, "Do not build octree maps (faster)");
   cmd->add_flag("--no-inpainting", args->run.no_inpainting, "Do not repair keyframes (faster)");
   cmd->callback([args, &exit_code] {

@@ -162,6 +162,22 @@ TEST_F(Bench, WritesBothColumnsAndTheImprovement) {
   md << md_file.rdbuf();
   EXPECT_NE(md.str().find("Table 1"), std::string::npos);
   EXPECT_NE(md.str().find("| walk |"), std::string::npos);
+
+  // Again with --reuse-baseline: the --no-dynamic runs are taken from their summary.json, not run.
+  const auto baseline_written = fs::last_write_time(out / "walk" / "no_dynamic" / "summary.json");
+  const int again = run_shell(
+      command("--sequences '" + (*root_ / "walk").string() + "' '" + (*root_ / "sit").string() +
+              "' --out '" + out.string() + "' --no-octomap --no-inpainting --segmentation none" +
+              " --config '" + config.string() + "' --reuse-baseline"),
+      *root_ / "bench_again.log", &log);
+  ASSERT_EQ(again, 0) << log;
+  EXPECT_NE(log.find("walk: reusing"), std::string::npos) << log;
+  EXPECT_NE(log.find("sit: reusing"), std::string::npos) << log;
+  EXPECT_EQ(fs::last_write_time(out / "walk" / "no_dynamic" / "summary.json"), baseline_written);
+  const json reused = read_json(out / "tables.json");
+  EXPECT_TRUE(reused["settings"]["reuse_baseline"].get<bool>());
+  EXPECT_EQ(reused["ate"]["rows"][0]["baseline"], tables["ate"]["rows"][0]["baseline"]);
+  EXPECT_EQ(reused["ate"]["rows"][0]["ours"], tables["ate"]["rows"][0]["ours"]);  // deterministic
 }
 
 TEST_F(Bench, MovedObjectRegionCoversTheRenderedBox) {

@@ -50,6 +50,9 @@ struct DynamicMemoryConfig {
   /// trusted (recalling there too marked shelves and desks that people had stood against).
   /// 0 = recall everywhere.
   int recall_band_px = 64;
+  /// Whether tracking drops the features in the recalled mask too (like the geometry mask's).
+  /// Otherwise the recalled mask only joins the combined mask (mapping, inpainting, outputs).
+  bool drop_features = false;
 
   double tolerance_at(double z) const {
     return depth_tolerance_m + depth_tolerance_quadratic * z * z;

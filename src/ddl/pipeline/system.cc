@@ -136,8 +136,9 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     masks.memory = dynamic_->memory_mask(frame, *T_c_w, &masks.memory_stats);
     timings_.record("dynamic_memory", memory_watch.elapsed_ms());
   }
-  cv::Mat exclusion =
-      dynamic_->exclusion_mask(dynamics::combine_masks(masks.geometry, masks.memory));
+  cv::Mat exclusion = dynamic_->exclusion_mask(
+      config_.dynamic.memory.drop_features ? dynamics::combine_masks(masks.geometry, masks.memory)
+                                           : masks.geometry);
   const Stopwatch drop_watch;
   tracker_->exclude_features(current, exclusion);
   timings_.record("geometry_feature_removal", drop_watch.elapsed_ms());
