@@ -193,6 +193,33 @@ TEST(DynamicMemory, RecallsOnlyNearTheImageBorderByDefault) {
   EXPECT_GT(score.precision, 0.97);
 }
 
+TEST(DynamicMemory, SpillOntoSurfacesAKeyframeSawAsStaticIsNotRemembered) {
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
+  const SE3 T_w_c = camera_at(0.0, 0.0);
+  const View view = render(cam, T_w_c, Person{});
+  const View empty_room = render(cam, camera_at(0.2, 5.0), std::nullopt);  // an earlier keyframe
+  const cv::Mat spilled = feature_exclusion_mask(view.person_mask, 3);
+  const int wall_in_mask = cv::countNonZero(spilled & ~view.person_mask);
+  for (const int static_views : {0, 5}) {
+    DynamicMemoryConfig config;
+    config.erode_px = 0;        // only the veto removes the spill here
+    config.recall_band_px = 0;  // the person stands in the middle of the image
+    config.static_views = static_views;
+    DynamicMemory memory(config, cam);
+    memory.add_static_view(camera_at(0.2, 5.0), empty_room.depth_m, cv::Mat());
+    memory.remember(0, T_w_c, spilled, view.depth_m, view.bgr);
+    const cv::Mat recalled = memory.recall(5, T_w_c.inverse(), view.depth_m, view.bgr);
+    const int wall_recalled = cv::countNonZero(recalled & ~view.person_mask);
+    const MaskScore score = score_mask(recalled, view.person_mask);
+    EXPECT_GT(score.recall, 0.97) << static_views;  // the keyframe saw the wall behind the person
+    if (static_views == 0) {
+      EXPECT_GT(wall_recalled, wall_in_mask / 2);
+    } else {
+      EXPECT_LT(wall_recalled, wall_in_mask / 20);
+    }
+  }
+}
+
 TEST(DynamicMemory, ConfigErrorsNameTheKey) {
   DynamicMemoryConfig config;
   config.max_age_frames = 0;

@@ -23,6 +23,7 @@ void DynamicMemoryConfig::validate() const {
   if (max_splat_radius_px < 0 || max_splat_radius_px > 32)
     fail("max_splat_radius_px", "must be in 0..32");
   if (recall_band_px < 0) fail("recall_band_px", "must be >= 0");
+  if (static_views < 0 || static_views > 30) fail("static_views", "must be in 0..30");
   if (colour_tolerance > 765) fail("colour_tolerance", "must be <= 765 (negative = off)");
 }
 
@@ -41,6 +42,34 @@ void DynamicMemory::forget_before(std::size_t frame_index) {
                                  frame_index - snapshots_.front().frame_index > max_age)) {
     snapshots_.pop_front();
   }
+}
+
+void DynamicMemory::add_static_view(const SE3& T_w_c, const cv::Mat& depth_m,
+                                    const cv::Mat& dynamic_mask) {
+  if (config_.static_views == 0) return;
+  CV_Assert(depth_m.type() == CV_32FC1);
+  CV_Assert(dynamic_mask.empty() ||
+            (dynamic_mask.type() == CV_8UC1 && dynamic_mask.size() == depth_m.size()));
+  static_views_.push_back({T_w_c.inverse(), depth_m, dynamic_mask});
+  while (static_views_.size() > static_cast<std::size_t>(config_.static_views)) {
+    static_views_.pop_front();
+  }
+}
+
+bool DynamicMemory::seen_as_static(const Vec3d& p_w) const {
+  for (const StaticView& view : static_views_) {
+    const Vec3d p_c = view.T_c_w * p_w;
+    const double z = p_c.z();
+    if (!(z >= config_.min_depth_m && z <= config_.max_depth_m)) continue;
+    const Vec2d uv = camera_.project(p_c);
+    if (!camera_.in_image(uv)) continue;
+    const int u = static_cast<int>(std::lround(uv.x()));
+    const int v = static_cast<int>(std::lround(uv.y()));
+    if (!view.dynamic_mask.empty() && view.dynamic_mask.at<std::uint8_t>(v, u) != 0) continue;
+    const float d = view.depth_m.at<float>(v, u);
+    if (d > 0.0f && std::abs(d - z) <= config_.tolerance_at(z)) return true;
+  }
+  return false;
 }
 
 void DynamicMemory::remember(std::size_t frame_index, const SE3& T_w_c, const cv::Mat& mask,
@@ -69,6 +98,7 @@ void DynamicMemory::remember(std::size_t frame_index, const SE3& T_w_c, const cv
       const double z = d[u];
       if (!(z >= config_.min_depth_m && z <= config_.max_depth_m)) continue;
       const Vec3d p_w = R * camera_.unproject(u, v, z) + t;
+      if (seen_as_static(p_w)) continue;
       const cv::Vec3b c = colour ? bgr.at<cv::Vec3b>(v, u) : cv::Vec3b();
       snapshot.points.push_back(
           {static_cast<float>(p_w.x()), static_cast<float>(p_w.y()), static_cast<float>(p_w.z()),

@@ -53,6 +53,12 @@ struct DynamicMemoryConfig {
   /// Whether tracking drops the features in the recalled mask too (like the geometry mask's).
   /// Otherwise the recalled mask only joins the combined mask (mapping, inpainting, outputs).
   bool drop_features = false;
+  /// Static veto: a point to remember is dropped when one of the last static_views keyframes
+  /// saw it as part of a static surface: outside its dynamic mask, at a depth that agrees. That
+  /// is CNN spill onto the floor at a person's feet or onto a shelf behind them, which erosion
+  /// and depth do not remove and which would otherwise be re-marked for max_age_frames. 0 = no
+  /// veto.
+  int static_views = 5;
 
   double tolerance_at(double z) const {
     return depth_tolerance_m + depth_tolerance_quadratic * z * z;
@@ -84,8 +90,15 @@ class DynamicMemory {
   cv::Mat recall(std::size_t frame_index, const SE3& T_c_w, const cv::Mat& depth_m,
                  const cv::Mat& bgr, DynamicMemoryStats* stats = nullptr);
 
+  /// A keyframe for the static veto: its pose, depth and combined dynamic mask (CV_8UC1,
+  /// non-zero = dynamic; may be empty). The last config.static_views are kept.
+  void add_static_view(const SE3& T_w_c, const cv::Mat& depth_m, const cv::Mat& dynamic_mask);
+
   /// Forgets everything (map reset: the old poses mean nothing any more).
-  void clear() { snapshots_.clear(); }
+  void clear() {
+    snapshots_.clear();
+    static_views_.clear();
+  }
 
   std::size_t remembered_points() const;
 
@@ -100,13 +113,21 @@ class DynamicMemory {
     std::size_t frame_index = 0;
     std::vector<Point> points;
   };
+  struct StaticView {
+    SE3 T_c_w;
+    cv::Mat depth_m;
+    cv::Mat dynamic_mask;
+  };
   void forget_before(std::size_t frame_index);
+  /// Whether a static view saw the world point p_w as static surface (the static veto).
+  bool seen_as_static(const Vec3d& p_w) const;
   /// Whether a pixel within 1 px of (u0, v0) has the point's colour (true without colours).
   bool colour_still_there(const Point& point, int u0, int v0, const cv::Mat& bgr) const;
 
   DynamicMemoryConfig config_;
   camera::PinholeCamera camera_;
-  std::deque<Snapshot> snapshots_;  // oldest first
+  std::deque<Snapshot> snapshots_;       // oldest first
+  std::deque<StaticView> static_views_;  // oldest first
 };
 
 }  // namespace ddl::dynamics

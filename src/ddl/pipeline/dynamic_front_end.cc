@@ -134,7 +134,9 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclu
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }
 
-void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m) {
+void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
+                                        const cv::Mat& dynamic_mask) {
+  if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
   if (!config_.enabled || !config_.use_geometry) return;
   std::lock_guard lock(cache_mutex_);
   depth_cache_[keyframe->id()] = depth_m;

@@ -91,7 +91,9 @@ class DynamicFrontEnd {
                     const cv::Mat& moved_exclusion) const;
 
   /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
-  void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m);
+  /// With the dynamic memory on, also its static veto view (`dynamic_mask`: the combined mask).
+  void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
+                         const cv::Mat& dynamic_mask);
 
  private:
   DynamicConfig config_;

@@ -230,7 +230,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (result.new_keyframe) {
     ++stats_.keyframes_created;
     frames_since_keyframe_ = 0;
-    dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m);
+    dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m, outcome.masks.combined);
     dense_->submit({result.new_keyframe, frame.rgb, frame.depth_m, outcome.masks.combined});
     if (config_.mode == RunMode::kDeterministic) {
       handle_keyframe_inline(result.new_keyframe);
