@@ -7,13 +7,15 @@
 //
 // remember() keeps a subsample of the pixels of an inferred CNN mask (eroded first, so its spill
 // onto the background is not kept), back-projected with their depth at the frame's tracked pose,
-// with their colour. recall() projects what was remembered during the last max_age_frames frames
-// into a new frame at its pose estimate; a point that lands within recall_band_px of the image
-// border, where its colour is still seen, marks the pixels around it whose measured depth agrees
-// (within tolerance_at(z)). A person still (partly) there is marked; where the person has gone,
-// the background behind is farther away, or, right behind them, of other colours. Only CNN
-// detections are remembered, never recalled pixels, so a false detection lives at most
-// max_age_frames frames. docs/dynamics.md, "Dynamic memory", has the measurements.
+// with their colour, except the points a recent keyframe saw unmasked as static surface (the
+// static veto: spill onto the floor at a person's feet). recall() projects what was remembered
+// during the last max_age_frames frames into a new frame at its pose estimate; a point that lands
+// within recall_band_px of the image border, where its colour is still seen, marks the pixels
+// around it whose measured depth agrees (within tolerance_at(z)). A person still (partly) there
+// is marked; where the person has gone, the background behind is farther away, or, right behind
+// them, of other colours. Only CNN detections are remembered, never recalled pixels, so a false
+// detection lives at most max_age_frames frames. docs/dynamics.md, "Dynamic memory", has the
+// measurements.
 // Not thread-safe: one instance per tracking thread.
 
 #include <cstddef>
