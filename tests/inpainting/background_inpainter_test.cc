@@ -57,6 +57,15 @@ double psnr_over(const cv::Mat& a, const cv::Mat& b, const cv::Mat& where) {
   return 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
+// Paints a pure red remnant of a person (40x40 px at `depth_m`) into a keyframe whose mask missed
+// it; the box projects into the person's pixels of the current frame at the origin. Returns it.
+cv::Rect paint_red_remnant(View& view, float depth_m) {
+  const cv::Rect remnant(200, 200, 40, 40);
+  view.depth(remnant).setTo(depth_m);
+  view.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  return remnant;
+}
+
 // Filled pixels of a pure red remnant (BGR 0, 0, 255).
 int red_pixels(const InpaintingResult& r) {
   cv::Mat red;
@@ -128,9 +137,7 @@ TEST(Inpainting, ContentInFrontOfTheCurrentDepthIsRejected) {
   const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
   const SE3 T_w_cur;
   View kf = render(cam, T_w_kf, false);
-  const cv::Rect remnant(200, 200, 40, 40);  // projects into the person's pixels below
-  kf.depth(remnant).setTo(1.0f);
-  kf.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  paint_red_remnant(kf, 1.0f);
   View cur = render(cam, T_w_cur, true);
   const cv::Mat mask = cur.depth < 2.0f;
   InpaintingConfig config;
@@ -154,9 +161,7 @@ TEST(Inpainting, ObservedBackgroundWinsOverAnEarlierRepair) {
   const SE3 T_w_older(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0));
   const SE3 T_w_cur;
   View newest = render(cam, T_w_newest, false);
-  const cv::Rect remnant(200, 200, 40, 40);  // projects into the person's pixels below
-  newest.depth(remnant).setTo(2.0f);
-  newest.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  const cv::Rect remnant = paint_red_remnant(newest, 2.0f);
   cv::Mat repaired = cv::Mat::zeros(newest.depth.size(), CV_8UC1);
   repaired(remnant).setTo(255);
   const View older = render(cam, T_w_older, false);
@@ -207,9 +212,7 @@ TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
   const SE3 T_w_oldest(Mat3d::Identity(), Vec3d(-0.2, 0.3, 0.0));
   const SE3 T_w_cur;
   View newest = render(cam, T_w_newest, false);
-  const cv::Rect remnant(200, 200, 40, 40);  // projects into the person's pixels below
-  newest.depth(remnant).setTo(2.0f);
-  newest.bgr(remnant).setTo(cv::Scalar(0, 0, 255));
+  paint_red_remnant(newest, 2.0f);
   const View older = render(cam, T_w_older, false);
   const View oldest = render(cam, T_w_oldest, false);
   const View cur = render(cam, T_w_cur, true);
