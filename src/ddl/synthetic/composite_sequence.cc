@@ -10,6 +10,7 @@
 #include "ddl/core/error.h"
 #include "ddl/io/trajectory_io.h"
 #include "ddl/io/tum_dataset.h"
+#include "ddl/synthetic/depth_model.h"
 #include "ddl/synthetic/people.h"
 #include "ddl/synthetic/renderer.h"
 #include "ddl/synthetic/sequence_internal.h"
@@ -128,9 +129,11 @@ class CompositeSequence final : public SequenceSource {
     RenderBuffers people = renderer_.make_buffers();
     renderer_.rasterize(prepared, 0, surfaces.size(), people);
 
-    // Depth test against the real depth: a person pixel exists where it is nearer than the real
-    // surface, or where the sensor measured nothing.
+    // Depth test against the real surface: a person pixel exists where it is nearer than it.
+    // Where the sensor measured nothing (a black monitor screen, IR shadows) the surface is taken
+    // from the nearest measured pixel, so the monitor still hides who walks behind it.
     f.background_depth_raw.convertTo(f.background_depth_exact_m, CV_32FC1, 1.0 / cam.depth_factor);
+    const cv::Mat surface_m = fill_missing_depth_nearest(f.background_depth_exact_m);
     f.dynamic_mask = cv::Mat(people.id.size(), CV_8UC1, cv::Scalar(0));
     f.entity = cv::Mat(people.id.size(), CV_32SC1, cv::Scalar(0));
     f.depth_exact_m = f.background_depth_exact_m.clone();
@@ -138,7 +141,7 @@ class CompositeSequence final : public SequenceSource {
     for (int v = 0; v < people.id.rows; ++v) {
       int* id = people.id.ptr<int>(v);
       const float* z = people.depth_m.ptr<float>(v);
-      const float* real = f.background_depth_exact_m.ptr<float>(v);
+      const float* real = surface_m.ptr<float>(v);
       float* exact = f.depth_exact_m.ptr<float>(v);
       auto* mask = f.dynamic_mask.ptr<unsigned char>(v);
       int* ent = f.entity.ptr<int>(v);

@@ -121,4 +121,34 @@ void add_rgb_noise(cv::Mat& bgr, double sigma, std::uint64_t seed, std::uint64_t
   });
 }
 
+cv::Mat fill_missing_depth_nearest(const cv::Mat& depth_m) {
+  if (depth_m.type() != CV_32FC1) throw Error("fill_missing_depth_nearest: expects CV_32FC1");
+  const cv::Mat missing = depth_m <= 0.0f;  // distanceTransform: distance to the nearest 0 here
+  if (cv::countNonZero(missing) == 0 || cv::countNonZero(missing) == missing.total()) {
+    return depth_m.clone();
+  }
+  cv::Mat distance;
+  cv::Mat labels;
+  cv::distanceTransform(missing, distance, labels, cv::DIST_L2, cv::DIST_MASK_5,
+                        cv::DIST_LABEL_PIXEL);
+  // Each valid pixel carries its own label; look up the depth of the label's pixel.
+  std::vector<float> depth_of_label(static_cast<std::size_t>(depth_m.total()) + 1, 0.0f);
+  for (int v = 0; v < depth_m.rows; ++v) {
+    const float* d = depth_m.ptr<float>(v);
+    const int* l = labels.ptr<int>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (d[u] > 0.0f) depth_of_label[static_cast<std::size_t>(l[u])] = d[u];
+    }
+  }
+  cv::Mat filled = depth_m.clone();
+  for (int v = 0; v < depth_m.rows; ++v) {
+    float* f = filled.ptr<float>(v);
+    const int* l = labels.ptr<int>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (f[u] <= 0.0f) f[u] = depth_of_label[static_cast<std::size_t>(l[u])];
+    }
+  }
+  return filled;
+}
+
 }  // namespace ddl::synthetic

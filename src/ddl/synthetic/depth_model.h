@@ -48,6 +48,13 @@ cv::Mat apply_depth_model(const cv::Mat& depth_m, const cv::Mat& cos_incidence,
                           const DepthNoiseConfig& config, double depth_factor, std::uint64_t seed,
                           std::uint64_t frame);
 
+/// The real surface behind missing measurements: every 0 pixel of `depth_m` (CV_32FC1 metres)
+/// takes the depth of its nearest valid pixel (L2 distance). A composite uses it for its depth
+/// test: a black monitor screen the sensor cannot measure still hides what is behind it, instead
+/// of letting a person show through the holes of its depth. An image without any valid pixel is
+/// returned unchanged.
+cv::Mat fill_missing_depth_nearest(const cv::Mat& depth_m);
+
 /// Adds zero-mean sensor noise of standard deviation about sigma (in 8-bit levels) to a BGR image,
 /// deterministic per (seed, frame, pixel). sigma <= 0 leaves the image unchanged. With `only`
 /// (CV_8UC1), just the pixels where it is non-zero get noise (the same values they would get
