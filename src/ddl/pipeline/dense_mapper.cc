@@ -111,12 +111,18 @@ void DenseMapper::process(DenseKeyframe item) {
     // Without inpainting the dynamic pixels are simply left out of the map.
     stored.unfilled = mask;
   }
-  stored.exclude = stored.unfilled;
+  // stored.unfilled may be the caller's mask itself, which tracking and dynamic removal keep:
+  // the border goes into a new buffer (assigning a MatExpr to a Mat that shares its buffer
+  // writes through it - that grew the keyframe masks the dynamic memory keeps, before 2026-11-26).
   if (config_.mask_border_px > 0 && cv::countNonZero(mask) > 0) {
     cv::Mat grown;
     const int k = 2 * config_.mask_border_px + 1;
     cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
-    stored.exclude = stored.unfilled | (grown & ~mask);
+    cv::Mat exclude;
+    cv::bitwise_or(stored.unfilled, grown & ~mask, exclude);
+    stored.exclude = exclude;
+  } else {
+    stored.exclude = stored.unfilled;
   }
   timings_.record("inpainting", watch.elapsed_ms());
 
