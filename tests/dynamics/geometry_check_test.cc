@@ -173,8 +173,9 @@ TEST(GeometryCheck, NoisyStaticSceneWithPoseErrorGivesAnAlmostEmptyMask) {
 }
 
 // The static room with a grossly wrong pose (3 cm, 2 degrees: what fast motion or an RGB-depth
-// time offset does on real data): seeds all over the image. Without the gate (the default) they
-// grow into most of the frame; with it the frame gets no geometry mask.
+// time offset does on real data): seeds all over the image. Without the gates they grow into most
+// of the frame; with either gate (seed fraction; median depth residual, the default) the frame
+// gets no geometry mask.
 TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
   const auto cam = synthetic::tum3_camera();
   const double floor_y = kRoomFloorY;
@@ -188,18 +189,54 @@ TEST(GeometryCheck, ImplausiblyManySeedsMeanABadPose) {
   const std::vector<ReferenceView> refs = {reference_from(cam, T_w_ref, ref_depth, 1000, 7)};
   GeometryCheckConfig ungated;
   ungated.max_seed_fraction = 1.0;
+  ungated.max_median_residual_ratio = 1e9;
   GeometryCheckStats stats;
   const cv::Mat flooded =
       geometry_dynamic_mask(cur_depth, (T_w_cur * error).inverse(), refs, cam, ungated, &stats);
   ASSERT_GT(stats.points_dynamic, 0.05 * (stats.points_tested - stats.points_skipped_parallax));
   EXPECT_FALSE(stats.implausible);
   EXPECT_GT(cv::countNonZero(flooded), 0.05 * static_cast<double>(flooded.total()));
-  GeometryCheckConfig gated_config;
+  GeometryCheckConfig gated_config = ungated;
   gated_config.max_seed_fraction = 0.05;
   const cv::Mat gated = geometry_dynamic_mask(cur_depth, (T_w_cur * error).inverse(), refs, cam,
                                               gated_config, &stats);
   EXPECT_TRUE(stats.implausible);
   EXPECT_EQ(cv::countNonZero(gated), 0);
+}
+
+// The pose-quality gate (max_median_residual_ratio, on by default): the static room and a person
+// 1.6 m away who hides about a third of the reference's points. With the right pose the median
+// depth residual is the sensor noise and the person is found; with the current pose 12 cm off
+// along the optical axis (and 1 degree), every depth disagrees, and the frame gets no mask
+// instead of one flooded by seeds.
+TEST(GeometryCheck, AMedianDepthResidualAboveTauMeansABadPose) {
+  const auto cam = synthetic::tum3_camera();
+  const double floor_y = kRoomFloorY;
+  const std::vector<Box> furniture = room_furniture();
+  const SE3 T_w_ref;
+  const std::vector<ReferenceView> refs = {
+      reference_from(cam, T_w_ref, noisy_depth(cam, T_w_ref, 3.5, furniture, floor_y, 5), 1000, 8)};
+  const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.03, Vec3d::UnitY())), Vec3d(0.05, 0.0, 0.05));
+  std::vector<Box> scene = furniture;
+  scene.push_back({-0.45, 0.1, -0.8, 0.9, 1.6});
+  const cv::Mat cur_depth = noisy_depth(cam, T_w_cur, 3.5, scene, floor_y, 6);
+  const cv::Mat truth = truth_mask(render_depth(cam, T_w_cur, 3.5, scene, floor_y),
+                                   render_depth(cam, T_w_cur, 3.5, furniture, floor_y));
+  GeometryCheckStats stats;
+  const cv::Mat mask =
+      geometry_dynamic_mask(cur_depth, T_w_cur.inverse(), refs, cam, GeometryCheckConfig{}, &stats);
+  EXPECT_FALSE(stats.implausible);
+  EXPECT_LT(stats.median_residual_ratio, 0.3);
+  const MaskScore score = score_mask(mask, truth);
+  EXPECT_GT(score.recall, 0.8) << "precision " << score.precision;
+
+  const SE3 error(Mat3d(Eigen::AngleAxisd(1.0 * M_PI / 180.0, Vec3d::UnitX())),
+                  Vec3d(0.0, 0.0, 0.12));
+  const cv::Mat bad = geometry_dynamic_mask(cur_depth, (T_w_cur * error).inverse(), refs, cam,
+                                            GeometryCheckConfig{}, &stats);
+  EXPECT_GT(stats.median_residual_ratio, 0.6);
+  EXPECT_TRUE(stats.implausible);
+  EXPECT_EQ(cv::countNonZero(bad), 0);
 }
 
 // Fast rotation on a real sensor: 3 degrees per frame (90 deg/s at 30 fps, as at the peaks of
@@ -359,6 +396,18 @@ TEST(GeometryCheck, ConfigErrorsNameTheKey) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("dynamics.max_parallax_deg"), std::string::npos);
   }
+  GeometryCheckConfig veto;
+  veto.growth_veto = "some";
+  try {
+    veto.validate();
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("dynamics.growth_veto"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("'some'"), std::string::npos);
+  }
+  GeometryCheckConfig gate;
+  gate.max_median_residual_ratio = 0;
+  EXPECT_THROW(gate.validate(), ConfigError);
 }
 
 }  // namespace

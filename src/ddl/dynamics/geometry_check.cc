@@ -31,6 +31,9 @@ void GeometryCheckConfig::validate() const {
   if (!(region_depth_band_m > 0)) fail("region_depth_band_m", "must be > 0");
   if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
   if (dilation_px < 0) fail("dilation_px", "must be >= 0");
+  if (!(max_median_residual_ratio > 0)) fail("max_median_residual_ratio", "must be > 0");
+  if (growth_veto != "all" && growth_veto != "any_unrefuted")
+    fail("growth_veto", "must be all or any_unrefuted (got '" + growth_veto + "')");
   if (!(max_seed_fraction > 0 && max_seed_fraction <= 1))
     fail("max_seed_fraction", "must be in (0, 1]");
 }
@@ -135,7 +138,7 @@ struct Reference {
 // wider parallax than max_parallax_deg).
 Evidence reference_evidence(const Reference& ref, double u, double v, double z,
                             const camera::PinholeCamera& camera, const GeometryCheckConfig& config,
-                            double cos_max_parallax, int r) {
+                            double cos_max_parallax, int r, cv::Point* at = nullptr) {
   const Vec3d p = z * (ref.A * Vec3d(u, v, 1.0)) + ref.t;
   if (p.z() <= config.min_depth_m) return Evidence::kNone;
   // Parallax between the rays from both camera centres to the point.
@@ -145,6 +148,7 @@ Evidence reference_evidence(const Reference& ref, double u, double v, double z,
   const int uc = static_cast<int>(cvRound(camera.fx * p.x() / p.z() + camera.cx));
   const int vc = static_cast<int>(cvRound(camera.fy * p.y() / p.z() + camera.cy));
   const cv::Mat& d = ref.view->depth_image_m;
+  if (at != nullptr) *at = {uc, vc};
   if (uc - r < 0 || vc - r < 0 || uc + r >= d.cols || vc + r >= d.rows) return Evidence::kNone;
   const float zp = static_cast<float>(p.z());
   const float tau = static_cast<float>(config.threshold_at(p.z()));
@@ -211,7 +215,8 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
     dense.push_back({&view, T_ref_cur.rotation() * K_inv, T_ref_cur.translation()});
   }
   std::vector<cv::Point> seeds;
-  std::vector<float> motion_px;  // image motion of the tested points since the previous frame
+  std::vector<float> motion_px;       // image motion of the tested points since the previous frame
+  std::vector<float> residual_ratio;  // |z_meas - z_proj| / tau of the tested points
   for (const Reference& ref : dense) {
     const ReferenceView& view = *ref.view;
     const std::size_t n = view.pixels.size();
@@ -244,6 +249,8 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       const float z_meas = depth_m.at<float>(v, u);
       if (z_meas < config.min_depth_m || z_meas > config.max_depth_m) continue;
       const double z_proj = p_cur.z();
+      residual_ratio.push_back(
+          static_cast<float>(std::abs(z_meas - z_proj) / config.threshold_at(z_proj)));
       int r = config.window_radius_px;
       if (have_previous) {
         const Vec3d p_prev = T_prev_ref * p_ref;
@@ -270,8 +277,14 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
     std::nth_element(motion_px.begin(), mid, motion_px.end());
     local.median_motion_px = *mid;
   }
+  if (!residual_ratio.empty()) {
+    auto mid = residual_ratio.begin() + static_cast<std::ptrdiff_t>(residual_ratio.size() / 2);
+    std::nth_element(residual_ratio.begin(), mid, residual_ratio.end());
+    local.median_residual_ratio = *mid;
+  }
   const int compared = local.points_tested - local.points_skipped_parallax;
-  if (compared > 0 && local.points_dynamic > config.max_seed_fraction * compared) {
+  if ((compared > 0 && local.points_dynamic > config.max_seed_fraction * compared) ||
+      local.median_residual_ratio > config.max_median_residual_ratio) {
     local.implausible = true;
     if (stats != nullptr) *stats = local;
     return cv::Mat::zeros(depth_m.size(), CV_8UC1);
@@ -283,13 +296,27 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
   // not in the older ones.
   auto may_join_pixel = [&](cv::Point q) {
     const double z = depth_m.at<float>(q);
+    if (config.growth_veto == "all") {
+      for (const Reference& ref : dense) {
+        if (reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
+                               kGrowthWindowRadius) != Evidence::kStatic) {
+          return true;
+        }
+      }
+      return dense.empty();
+    }
+    bool seen_static = false;
     for (const Reference& ref : dense) {
-      if (reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
-                             kGrowthWindowRadius) != Evidence::kStatic) {
-        return true;
+      cv::Point at;
+      const Evidence e = reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
+                                            kGrowthWindowRadius, &at);
+      if (e == Evidence::kMoved) return true;
+      const cv::Mat& masked = ref.view->dynamic_mask;
+      if (e == Evidence::kStatic && (masked.empty() || masked.at<std::uint8_t>(at) == 0)) {
+        seen_static = true;
       }
     }
-    return dense.empty();
+    return !seen_static;
   };
   // Decided once per kGrowthBlock^2 block, at the first pixel asked: a quarter of the cost (the
   // region's outline gets 2 px coarser, below the final dilation).

@@ -25,6 +25,7 @@
 #include <functional>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
@@ -51,11 +52,22 @@ struct GeometryCheckConfig {
                                       // lone seeds at noisy edges grew false regions)
   double region_depth_band_m = 0.25;  // flood fill: |depth - seed depth| below this joins
   int region_max_radius_px = 200;     // flood fill stays inside this radius around its seed
-  int dilation_px = 2;                // final dilation of the geometry mask
+  /// Which references stop a region from growing into a pixel: "all" (every reference saw the
+  /// same surface there; one that could not see it lets the region in) or "any_unrefuted" (one
+  /// reference saw the same surface outside its own dynamic mask, and none saw through it).
+  std::string growth_veto = "all";
+  int dilation_px = 2;  // final dilation of the geometry mask
   /// Safety net: more seeds than this fraction of the points tested is taken for a bad pose, and
   /// the frame gets no geometry mask. 1 = off (default: with motion-grown windows real fast
   /// motion stays below 5%, while people near the camera hide up to 2/3 of the points).
   double max_seed_fraction = 1.0;
+  /// Safety net for a bad pose: when the median over the tested points of |measured - projected
+  /// depth| / tau exceeds this, the frame gets no geometry mask. With the right pose it is the
+  /// depth noise over tau (synthetic walking sequences: at most 0.28, people included); on real
+  /// fast motion (fr1_rpy) the low-cost pose is off at times and it reaches 2. A median cannot
+  /// tell a bad pose from an object that hides more than half of the reference points
+  /// (docs/dynamics.md, "Pose-quality gate").
+  double max_median_residual_ratio = 0.6;
 
   /// tau(z), the depth difference that counts as a change at depth z.
   double threshold_at(double z) const {
@@ -75,6 +87,9 @@ struct ReferenceView {
   /// Full depth image of the keyframe (CV_32FC1 metres). Without it the reference gives no seeds
   /// (a candidate cannot be checked back) and says nothing about where regions may grow.
   cv::Mat depth_image_m;
+  /// The keyframe's own dynamic mask (CV_8UC1, non-zero = dynamic), when available: where it
+  /// marked something, its view is no evidence of a static surface (growth_veto any_unrefuted).
+  cv::Mat dynamic_mask;
 };
 
 struct GeometryCheckStats {
@@ -84,6 +99,10 @@ struct GeometryCheckStats {
   int points_rejected_static_occluder = 0;  // candidates the reference did not confirm
   bool implausible = false;                 // seeds above max_seed_fraction: no mask for this frame
   double median_motion_px = 0.0;            // median image motion of the tested points
+  /// Median over the tested points of |measured - projected depth| / tau(z): about the sensor
+  /// noise over tau when the pose is right and most points are static, above 1 when the pose is
+  /// off by more than tau (or when something new hides more than half of the points).
+  double median_residual_ratio = 0.0;
 };
 
 /// Dynamic seed pixels and grown regions, CV_8UC1 255 = dynamic, the size of `depth_m`.

@@ -99,7 +99,10 @@ cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_
     {
       std::lock_guard lock(cache_mutex_);
       auto it = depth_cache_.find(kf->id());
-      if (it != depth_cache_.end()) view.depth_image_m = it->second;
+      if (it != depth_cache_.end()) {
+        view.depth_image_m = it->second.depth_m;
+        view.dynamic_mask = it->second.dynamic_mask;
+      }
     }
     views.push_back(std::move(view));
   }
@@ -139,7 +142,7 @@ void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const 
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
   if (!config_.enabled || !config_.use_geometry) return;
   std::lock_guard lock(cache_mutex_);
-  depth_cache_[keyframe->id()] = depth_m;
+  depth_cache_[keyframe->id()] = {depth_m, dynamic_mask};
   while (depth_cache_.size() > config_.keyframe_depth_cache)
     depth_cache_.erase(depth_cache_.begin());
 }

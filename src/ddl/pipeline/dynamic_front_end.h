@@ -102,8 +102,12 @@ class DynamicFrontEnd {
   cv::Mat last_cnn_mask_;  // cnn_mask()'s thread only
   std::optional<std::size_t> last_cnn_index_;
   std::mutex cache_mutex_;
-  std::map<map::KeyFrameId, cv::Mat> depth_cache_;
-  dynamics::DynamicMemory memory_;  // tracking thread only
+  struct KeyframeImages {
+    cv::Mat depth_m;
+    cv::Mat dynamic_mask;
+  };
+  std::map<map::KeyFrameId, KeyframeImages> depth_cache_;  // for the geometry check
+  dynamics::DynamicMemory memory_;                         // tracking thread only
 };
 
 }  // namespace ddl::pipeline

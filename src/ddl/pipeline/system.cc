@@ -124,9 +124,12 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
         dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);
     const dynamics::GeometryCheckStats& g = masks.geometry_stats;
     if (g.implausible) ++stats_.geometry_checks_implausible;
-    spdlog::debug("frame {}: geometry check tested {} points, {} seeds, motion {:.1f} px{}",
-                  frame.index, g.points_tested - g.points_skipped_parallax, g.points_dynamic,
-                  g.median_motion_px, g.implausible ? " (implausible: no mask)" : "");
+    spdlog::debug(
+        "frame {}: geometry check tested {} points, {} seeds, motion {:.1f} px, median residual "
+        "{:.2f} tau{}",
+        frame.index, g.points_tested - g.points_skipped_parallax, g.points_dynamic,
+        g.median_motion_px, g.median_residual_ratio,
+        g.implausible ? " (implausible: no mask)" : "");
     masks.geometry_ms = geometry_watch.elapsed_ms();
     timings_.record("geometry_check", masks.geometry_ms);
   }
