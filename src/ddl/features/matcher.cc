@@ -11,12 +11,6 @@
 namespace ddl::features {
 namespace {
 
-struct NearestTwo {
-  int best = std::numeric_limits<int>::max();
-  int second = std::numeric_limits<int>::max();
-  int best_index = -1;
-};
-
 template <bool kHardwarePopcount>
 [[gnu::always_inline]] inline int distance_32(const std::uint8_t* a, const std::uint8_t* b) {
   if constexpr (kHardwarePopcount) {
@@ -45,13 +39,7 @@ template <bool kHardwarePopcount>
     NearestTwo n;
     for (int j = 0; j < train.rows; ++j) {
       const int d = distance_32<kHardwarePopcount>(q, train.ptr<std::uint8_t>(j));
-      if (d < n.best) {
-        n.second = n.best;
-        n.best = d;
-        n.best_index = j;
-      } else if (d < n.second) {
-        n.second = d;
-      }
+      n.offer(d, j);
       if (d < train_best[j]) {
         train_best[j] = d;
         train_best_query[j] = i;
@@ -122,7 +110,7 @@ std::vector<cv::DMatch> match_brute_force(const cv::Mat& query, const cv::Mat& t
   for (int i = 0; i < query.rows; ++i) {
     const NearestTwo& n = per_query[i];
     if (n.best_index < 0 || n.best > options.max_distance) continue;
-    if (options.ratio < 1.0f && n.second != std::numeric_limits<int>::max() &&
+    if (options.ratio < 1.0f && n.second != NearestTwo::kNone &&
         !(static_cast<float>(n.best) < options.ratio * static_cast<float>(n.second))) {
       continue;
     }

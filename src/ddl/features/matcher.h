@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -52,6 +53,31 @@ inline int hamming_distance(const std::uint8_t* a, const std::uint8_t* b) {
 inline int hamming_distance(const cv::Mat& a, int row_a, const cv::Mat& b, int row_b) {
   return hamming_distance(a.ptr<std::uint8_t>(row_a), b.ptr<std::uint8_t>(row_b));
 }
+
+/// The nearest and the second-nearest candidate offered so far, for Lowe's ratio test (ORB-SLAM2's
+/// matchers keep both). Strict comparisons: of equal distances the first offered stays nearest.
+struct NearestTwo {
+  static constexpr int kNone = std::numeric_limits<int>::max();  // nothing offered yet
+  int best = kNone;                                              // Hamming distances in bits
+  int second = kNone;
+  int best_index = -1;
+  int best_level = -1;  // pyramid levels of the two, where a matcher compares them
+  int second_level = -1;
+
+  bool found() const { return best_index >= 0; }
+  void offer(int distance, int index, int level = -1) {
+    if (distance < best) {
+      second = best;
+      second_level = best_level;
+      best = distance;
+      best_index = index;
+      best_level = level;
+    } else if (distance < second) {
+      second = distance;
+      second_level = level;
+    }
+  }
+};
 
 struct BruteForceMatchOptions {
   int max_distance = kThHigh;  // matches with a larger Hamming distance are rejected

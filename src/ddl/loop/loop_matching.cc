@@ -25,27 +25,19 @@ std::vector<map::MapPointPtr> search_by_bow(const map::KeyFrame& kf1, const map:
         for (const std::uint32_t i1 : node1) {
           const map::MapPointPtr& p1 = points1[i1];
           if (!p1 || p1->is_bad()) continue;
-          int best = 257;
-          int second = 257;
-          long best_i2 = -1;
+          features::NearestTwo nearest;
           for (const std::uint32_t i2 : node2) {
             const map::MapPointPtr& p2 = points2[i2];
             if (used2[i2] || !p2 || p2->is_bad()) continue;
-            const int d = features::hamming_distance(f1.descriptors, static_cast<int>(i1),
-                                                     f2.descriptors, static_cast<int>(i2));
-            if (d < best) {
-              second = best;
-              best = d;
-              best_i2 = i2;
-            } else if (d < second) {
-              second = d;
-            }
+            nearest.offer(features::hamming_distance(f1.descriptors, static_cast<int>(i1),
+                                                     f2.descriptors, static_cast<int>(i2)),
+                          static_cast<int>(i2));
           }
-          if (best_i2 < 0 || best >= max_hamming ||
-              static_cast<float>(best) >= ratio * static_cast<float>(second)) {
+          if (!nearest.found() || nearest.best >= max_hamming ||
+              static_cast<float>(nearest.best) >= ratio * static_cast<float>(nearest.second)) {
             continue;
           }
-          const auto i2 = static_cast<std::size_t>(best_i2);
+          const auto i2 = static_cast<std::size_t>(nearest.best_index);
           used2[i2] = true;
           matches[i1] = points2[i2];
           if (check_orientation) {

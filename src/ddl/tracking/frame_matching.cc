@@ -136,31 +136,20 @@ int FrameMatcher::match_projections(Frame& frame, const std::vector<PointProject
     if (descriptor.empty()) continue;
     const std::uint8_t* d_point = descriptor.ptr<std::uint8_t>(0);
 
-    int best_distance = kNoMatch;
-    int second_distance = kNoMatch;
-    int best_level = -1;
-    int second_level = -1;
-    std::size_t best_index = 0;
+    features::NearestTwo nearest;
     for (std::size_t j : candidates_) {
       if (slot_taken(frame, j)) continue;
       if (f.u_right[j] > 0.0f && std::fabs(proj.u_right - f.u_right[j]) > radius) continue;
-      const int distance = features::hamming_distance(d_point, descriptor_row(f.descriptors, j));
-      if (distance < best_distance) {
-        second_distance = best_distance;
-        second_level = best_level;
-        best_distance = distance;
-        best_level = f.keypoints[j].octave;
-        best_index = j;
-      } else if (distance < second_distance) {
-        second_distance = distance;
-        second_level = f.keypoints[j].octave;
-      }
+      nearest.offer(features::hamming_distance(d_point, descriptor_row(f.descriptors, j)),
+                    static_cast<int>(j), f.keypoints[j].octave);
     }
-    if (best_distance > features::kThHigh) continue;
-    if (best_level == second_level &&
-        static_cast<float>(best_distance) > ratio * static_cast<float>(second_distance)) {
+    if (!nearest.found() || nearest.best > features::kThHigh) continue;
+    // ORB-SLAM2: the ratio test only between candidates of the same pyramid level.
+    if (nearest.best_level == nearest.second_level &&
+        static_cast<float>(nearest.best) > ratio * static_cast<float>(nearest.second)) {
       continue;
     }
+    const auto best_index = static_cast<std::size_t>(nearest.best_index);
     frame.set_map_point(best_index, proj.point);
     frame.set_outlier(best_index, false);
     ++matches;
@@ -196,23 +185,15 @@ int FrameMatcher::match_bow(const map::KeyFrame& keyframe, const Frame& frame, f
       const map::MapPointPtr& point = kf_points[kf_index];
       if (!point || point->is_bad()) continue;
       const std::uint8_t* d_kf = descriptor_row(kf.descriptors, kf_index);
-      int best_distance = kNoMatch;
-      int second_distance = kNoMatch;
-      std::size_t best_index = 0;
+      features::NearestTwo nearest;
       for (std::uint32_t f_index : f_it->feature_indices) {
         if (matches[f_index]) continue;
-        const int distance =
-            features::hamming_distance(d_kf, descriptor_row(f.descriptors, f_index));
-        if (distance < best_distance) {
-          second_distance = best_distance;
-          best_distance = distance;
-          best_index = f_index;
-        } else if (distance < second_distance) {
-          second_distance = distance;
-        }
+        nearest.offer(features::hamming_distance(d_kf, descriptor_row(f.descriptors, f_index)),
+                      static_cast<int>(f_index));
       }
-      if (best_distance <= features::kThLow &&
-          static_cast<float>(best_distance) < ratio * static_cast<float>(second_distance)) {
+      if (nearest.found() && nearest.best <= features::kThLow &&
+          static_cast<float>(nearest.best) < ratio * static_cast<float>(nearest.second)) {
+        const auto best_index = static_cast<std::size_t>(nearest.best_index);
         matches[best_index] = point;
         histogram_.add(kf.keypoints[kf_index].angle, f.keypoints[best_index].angle,
                        static_cast<int>(best_index));
