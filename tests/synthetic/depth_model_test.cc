@@ -81,16 +81,16 @@ TEST(DepthModel, MissingDepthTakesTheNearestMeasuredSurface) {
   // (right half), and a 2-pixel unmeasured strip on the wall side of their boundary.
   cv::Mat depth(40, 60, CV_32FC1, cv::Scalar(3.0));
   depth(cv::Rect(0, 0, 30, 40)).setTo(1.0);
-  depth(cv::Rect(5, 5, 20, 30)).setTo(0.0);   // the screen: nearest measured pixel is the frame
+  depth(cv::Rect(5, 5, 20, 30)).setTo(0.0);  // the screen: nearest measured pixel is the frame
   depth(cv::Rect(30, 0, 2, 40)).setTo(0.0);  // the strip: nearer to the wall column 32 at u = 31
   const cv::Mat filled = fill_missing_depth_nearest(depth);
   for (int v = 5; v < 35; ++v) {
     for (int u = 5; u < 25; ++u) ASSERT_FLOAT_EQ(filled.at<float>(v, u), 1.0f) << u << "," << v;
   }
+  // Column 31 is next to the wall (column 32), column 30 next to the monitor (column 29).
   EXPECT_FLOAT_EQ(filled.at<float>(20, 31), 3.0f);
-  EXPECT_FLOAT_EQ(filled.at<float>(20, 30), 1.0f);  // a tie between columns 29 and 32 is not
-                                                     // possible: 29 is one pixel away, 32 two
-  EXPECT_FLOAT_EQ(filled.at<float>(0, 59), 3.0f);    // measured pixels are kept
+  EXPECT_FLOAT_EQ(filled.at<float>(20, 30), 1.0f);
+  EXPECT_FLOAT_EQ(filled.at<float>(0, 59), 3.0f);  // measured pixels are kept
   // Nothing measured at all: unchanged.
   const cv::Mat empty(10, 10, CV_32FC1, cv::Scalar(0.0));
   EXPECT_EQ(cv::countNonZero(fill_missing_depth_nearest(empty)), 0);
