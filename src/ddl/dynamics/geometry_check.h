@@ -63,10 +63,10 @@ struct GeometryCheckConfig {
   double max_seed_fraction = 1.0;
   /// Safety net for a bad pose: when the median over the tested points of |measured - projected
   /// depth| / tau exceeds this, the frame gets no geometry mask. With the right pose it is the
-  /// depth noise over tau (synthetic walking sequences: at most 0.28, people included); on real
-  /// fast motion (fr1_rpy) the low-cost pose is off at times and it reaches 2. A median cannot
-  /// tell a bad pose from an object that hides more than half of the reference points
-  /// (docs/dynamics.md, "Pose-quality gate").
+  /// depth noise over tau (syn_walking_rpy: at most 0.28, people included); on real fast motion
+  /// (fr1_rpy) the low-cost pose is off at times and it reaches 2. A median cannot tell a bad
+  /// pose from an object that hides more than half of the reference points (a walker close to
+  /// the camera: 10 frames of syn_walking_xyz; docs/dynamics.md, "Pose-quality gate").
   double max_median_residual_ratio = 0.6;
 
   /// tau(z), the depth difference that counts as a change at depth z.
