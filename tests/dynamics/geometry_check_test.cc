@@ -313,6 +313,40 @@ TEST(GeometryCheck, PersonOnTheFloorIsFoundWithoutTheFloor) {
   EXPECT_GT(score.recall, 0.85) << "precision " << score.precision;
 }
 
+// growth_veto: the person on the floor again, with a second reference that looks away (the floor
+// around the feet is out of its view). With "all" a reference that cannot see a pixel lets the
+// region in, so it spreads over the floor; with "any_unrefuted" the first reference, which saw the
+// floor there outside its own dynamic mask, stops it. Where that reference's own mask covers the
+// floor, its view is no evidence and the region may spread again.
+TEST(GeometryCheck, GrowthVetoByAReferenceThatSawTheSurfaceUnmasked) {
+  const auto cam = synthetic::tum3_camera();
+  const double floor_y = 0.9;
+  const SE3 T_w_ref;
+  const SE3 T_w_away(Mat3d(Eigen::AngleAxisd(0.7, Vec3d::UnitY())), Vec3d(0.0, 0.0, 0.0));
+  const SE3 T_w_cur(Mat3d(Eigen::AngleAxisd(0.03, Vec3d::UnitY())), Vec3d(0.05, 0.0, 0.03));
+  const std::vector<Box> person = {{-0.25, 0.2, -0.8, floor_y, 3.0}};
+  const cv::Mat cur_depth = noisy_depth(cam, T_w_cur, 3.5, person, floor_y, 2);
+  const cv::Mat truth = truth_mask(render_depth(cam, T_w_cur, 3.5, person, floor_y),
+                                   render_depth(cam, T_w_cur, 3.5, {}, floor_y));
+  std::vector<ReferenceView> refs = {
+      reference_from(cam, T_w_ref, noisy_depth(cam, T_w_ref, 3.5, {}, floor_y, 1), 1000, 5),
+      reference_from(cam, T_w_away, noisy_depth(cam, T_w_away, 3.5, {}, floor_y, 3), 1000, 6)};
+  GeometryCheckConfig config;
+  const auto score_with = [&](const std::string& veto) {
+    config.growth_veto = veto;
+    return score_mask(geometry_dynamic_mask(cur_depth, T_w_cur.inverse(), refs, cam, config),
+                      truth);
+  };
+  const MaskScore all = score_with("all");
+  const MaskScore unrefuted = score_with("any_unrefuted");
+  refs[0].dynamic_mask = cv::Mat(cam.height, cam.width, CV_8UC1, cv::Scalar(255));
+  const MaskScore masked = score_with("any_unrefuted");
+  EXPECT_GT(unrefuted.precision, 0.9) << "recall " << unrefuted.recall;
+  EXPECT_GT(unrefuted.recall, 0.85);
+  EXPECT_LT(all.precision, unrefuted.precision - 0.1);
+  EXPECT_LT(masked.precision, unrefuted.precision - 0.1);
+}
+
 // Without a depth image the reference cannot confirm a candidate: no seeds from it.
 TEST(GeometryCheck, ReferenceWithoutDepthImageGivesNoSeeds) {
   const auto cam = synthetic::tum3_camera();
