@@ -43,6 +43,7 @@ ENUMS = {
     "BaLinearSolver::kAuto": None,
     "Backend": "segmentation::Backend",
     "RunMode": "pipeline::RunMode",
+    "GrowthVeto": "dynamics::GrowthVeto",
 }
 # Fields that are runtime-only (set from the command line, never read from a file).
 RUNTIME_ONLY = {("SystemConfig", "shared_dir"), ("SystemConfig", "output_dir"),
@@ -119,7 +120,7 @@ def main():
                 out.append(f'  v.field("{fname}", c.{fname}, "{doc_lit}");')
             elif base in structs:
                 out.append(f'  v.section("{fname}", c.{fname}, "{doc_lit}");')
-            elif base in ("BaLinearSolver", "Backend", "RunMode"):
+            elif base in ("BaLinearSolver", "Backend", "RunMode", "GrowthVeto"):
                 out.append(f'  v.choice("{fname}", c.{fname}, "{doc_lit}");')
             else:
                 sys.exit(f"{name}.{fname}: unsupported type {ctype}")

@@ -39,6 +39,8 @@ TEST(SystemConfig, ValuesAreReadIntoTheStructs) {
       "  segmentation:\n"
       "    backend: none\n"
       "    dynamic_classes: [person, dog]\n"
+      "  geometry:\n"
+      "    growth_veto: any_unrefuted\n"
       "dense:\n"
       "  octree:\n"
       "    resolution_m: 0.1\n",
@@ -50,6 +52,7 @@ TEST(SystemConfig, ValuesAreReadIntoTheStructs) {
   EXPECT_EQ(config.dynamic.segmentation.backend, segmentation::Backend::kNone);
   EXPECT_EQ(config.dynamic.segmentation.dynamic_classes,
             (std::vector<std::string>{"person", "dog"}));
+  EXPECT_EQ(config.dynamic.geometry.growth_veto, dynamics::GrowthVeto::kAnyUnrefuted);
   EXPECT_DOUBLE_EQ(config.dense.octree.resolution_m, 0.1);
   // Untouched keys keep their defaults.
   EXPECT_EQ(config.tracking.orb.num_levels, 8);
@@ -70,6 +73,11 @@ TEST(SystemConfig, InvalidValueNamesTheKey) {
   const std::string enum_msg = message_of([] { parse_system_config("mode: fast\n", "bad.yaml"); });
   EXPECT_NE(enum_msg.find("mode"), std::string::npos) << enum_msg;
   EXPECT_NE(enum_msg.find("deterministic"), std::string::npos) << enum_msg;
+  const std::string veto_msg = message_of(
+      [] { parse_system_config("dynamic:\n  geometry:\n    growth_veto: some\n", "bad.yaml"); });
+  EXPECT_NE(veto_msg.find("dynamic.geometry.growth_veto"), std::string::npos) << veto_msg;
+  EXPECT_NE(veto_msg.find("'some'"), std::string::npos) << veto_msg;
+  EXPECT_NE(veto_msg.find("any_unrefuted"), std::string::npos) << veto_msg;
   const std::string type_msg =
       message_of([] { parse_system_config("keyframe_queue_capacity: lots\n", "bad.yaml"); });
   EXPECT_NE(type_msg.find("keyframe_queue_capacity"), std::string::npos) << type_msg;

@@ -41,6 +41,12 @@ struct EnumNames<segmentation::Backend> {
 };
 
 template <>
+struct EnumNames<dynamics::GrowthVeto> {
+  static constexpr std::pair<dynamics::GrowthVeto, const char*> kValues[] = {
+      {dynamics::GrowthVeto::kAll, "all"}, {dynamics::GrowthVeto::kAnyUnrefuted, "any_unrefuted"}};
+};
+
+template <>
 struct EnumNames<optimization::BaLinearSolver> {
   static constexpr std::pair<optimization::BaLinearSolver, const char*> kValues[] = {
       {optimization::BaLinearSolver::kAuto, "auto"},

@@ -32,8 +32,6 @@ void GeometryCheckConfig::validate() const {
   if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
   if (dilation_px < 0) fail("dilation_px", "must be >= 0");
   if (!(max_median_residual_ratio > 0)) fail("max_median_residual_ratio", "must be > 0");
-  if (growth_veto != "all" && growth_veto != "any_unrefuted")
-    fail("growth_veto", "must be all or any_unrefuted (got '" + growth_veto + "')");
   if (!(max_seed_fraction > 0 && max_seed_fraction <= 1))
     fail("max_seed_fraction", "must be in (0, 1]");
 }
@@ -294,29 +292,23 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
   // through the pixel, or could not see it (out of view, hidden, wide parallax), lets it join:
   // a person who moved less than their width since the latest keyframe looks static in that one,
   // not in the older ones.
+  const bool veto_by_all = config.growth_veto == GrowthVeto::kAll;
   auto may_join_pixel = [&](cv::Point q) {
     const double z = depth_m.at<float>(q);
-    if (config.growth_veto == "all") {
-      for (const Reference& ref : dense) {
-        if (reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
-                               kGrowthWindowRadius) != Evidence::kStatic) {
-          return true;
-        }
-      }
-      return dense.empty();
-    }
-    bool seen_static = false;
+    bool vetoed = false;
     for (const Reference& ref : dense) {
       cv::Point at;
       const Evidence e = reference_evidence(ref, q.x, q.y, z, camera, config, cos_max_parallax,
                                             kGrowthWindowRadius, &at);
       if (e == Evidence::kMoved) return true;
-      const cv::Mat& masked = ref.view->dynamic_mask;
-      if (e == Evidence::kStatic && (masked.empty() || masked.at<std::uint8_t>(at) == 0)) {
-        seen_static = true;
+      if (e == Evidence::kNone) {
+        if (veto_by_all) return true;  // a reference that could not see the pixel lets it in
+        continue;
       }
+      const cv::Mat& masked = ref.view->dynamic_mask;
+      if (veto_by_all || masked.empty() || masked.at<std::uint8_t>(at) == 0) vetoed = true;
     }
-    return !seen_static;
+    return !vetoed;
   };
   // Decided once per kGrowthBlock^2 block, at the first pixel asked: a quarter of the cost (the
   // region's outline gets 2 px coarser, below the final dilation).

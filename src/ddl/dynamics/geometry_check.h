@@ -25,13 +25,18 @@
 #include <functional>
 #include <opencv2/core.hpp>
 #include <optional>
-#include <string>
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
 
 namespace ddl::dynamics {
+
+/// How region growth is stopped (GeometryCheckConfig::growth_veto).
+enum class GrowthVeto {
+  kAll,           // YAML "all"
+  kAnyUnrefuted,  // YAML "any_unrefuted"
+};
 
 struct GeometryCheckConfig {
   int max_reference_keyframes = 5;          // reference keyframes with most overlap (paper: 5)
@@ -52,10 +57,10 @@ struct GeometryCheckConfig {
                                       // lone seeds at noisy edges grew false regions)
   double region_depth_band_m = 0.25;  // flood fill: |depth - seed depth| below this joins
   int region_max_radius_px = 200;     // flood fill stays inside this radius around its seed
-  /// Which references stop a region from growing into a pixel: "all" (every reference saw the
-  /// same surface there; one that could not see it lets the region in) or "any_unrefuted" (one
+  /// Which references stop a region from growing into a pixel: all (every reference saw the
+  /// same surface there; one that could not see it lets the region in) or any_unrefuted (one
   /// reference saw the same surface outside its own dynamic mask, and none saw through it).
-  std::string growth_veto = "all";
+  GrowthVeto growth_veto = GrowthVeto::kAll;
   int dilation_px = 2;  // final dilation of the geometry mask
   /// Safety net: more seeds than this fraction of the points tested is taken for a bad pose, and
   /// the frame gets no geometry mask. 1 = off (default: with motion-grown windows real fast
