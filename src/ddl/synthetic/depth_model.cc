@@ -124,7 +124,8 @@ void add_rgb_noise(cv::Mat& bgr, double sigma, std::uint64_t seed, std::uint64_t
 cv::Mat fill_missing_depth_nearest(const cv::Mat& depth_m) {
   if (depth_m.type() != CV_32FC1) throw Error("fill_missing_depth_nearest: expects CV_32FC1");
   const cv::Mat missing = depth_m <= 0.0f;  // distanceTransform: distance to the nearest 0 here
-  if (cv::countNonZero(missing) == 0 || cv::countNonZero(missing) == missing.total()) {
+  const auto missing_count = static_cast<std::size_t>(cv::countNonZero(missing));
+  if (missing_count == 0 || missing_count == missing.total()) {
     return depth_m.clone();
   }
   cv::Mat distance;
