@@ -247,8 +247,8 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
       const float z_meas = depth_m.at<float>(v, u);
       if (z_meas < config.min_depth_m || z_meas > config.max_depth_m) continue;
       const double z_proj = p_cur.z();
-      residual_ratio.push_back(
-          static_cast<float>(std::abs(z_meas - z_proj) / config.threshold_at(z_proj)));
+      const double tau_proj = config.threshold_at(z_proj);
+      residual_ratio.push_back(static_cast<float>(std::abs(z_meas - z_proj) / tau_proj));
       int r = config.window_radius_px;
       if (have_previous) {
         const Vec3d p_prev = T_prev_ref * p_ref;
@@ -259,7 +259,7 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
                        r + static_cast<int>(std::ceil(config.motion_window_gain * motion)));
         }
       }
-      if (!hidden_in_current(depth_m, u, v, z_proj, config.threshold_at(z_proj), r)) continue;
+      if (!hidden_in_current(depth_m, u, v, z_proj, tau_proj, r)) continue;
       // Back-check: did the reference see through what hides its point now?
       if (reference_evidence(ref, u, v, z_meas, camera, config, cos_max_parallax, r) !=
           Evidence::kMoved) {
