@@ -52,6 +52,15 @@ synthetic::SequenceConfig config_for(const synthetic::Preset& preset, const Synt
   }
   if (!args.background.empty()) {
     config.background_dir = args.background;
+    // A preset's void boxes (world frame) describe its own background sequence only.
+    const fs::path own = fs::path(preset.background_in_shared).filename();
+    fs::path given = fs::path(args.background).lexically_normal();
+    if (given.filename().empty()) given = given.parent_path();  // a trailing '/'
+    if (!config.void_boxes_w.empty() && given.filename() != own) {
+      spdlog::warn("synth: the void boxes of {} describe {}, not {}: no void masks", preset.name,
+                   own.string(), args.background);
+      config.void_boxes_w.clear();
+    }
   } else if (!preset.background_in_shared.empty()) {
     config.background_dir = (fs::path(shared) / preset.background_in_shared).string();
   }

@@ -17,6 +17,10 @@
 #include "ddl/io/tum_dataset.h"
 #include "test_support.h"
 
+#ifdef DDL_HAVE_SEGMENTATION
+#include "ddl/segmentation/segmenter.h"
+#endif
+
 namespace ddl::synthetic {
 namespace {
 
@@ -258,6 +262,75 @@ TEST(Sequence, CompositeDrawsPeopleOnlyInFrontOfTheRealScene) {
   EXPECT_GE(frames_with_people, frames_checked / 2);
 }
 
+TEST(Sequence, CompositeWritesAVoidMaskPerFrame) {
+  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
+  if (!fs::exists(background + "/groundtruth.txt")) {
+    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
+  }
+  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
+  config.background_dir = background;
+  config.frames = 3;
+  const TempDir dir("ddl_composite_void");
+  write_sequence(*make_sequence_source(config), dir.str());
+  const auto rows = io::read_text_table((dir.path() / "void_mask.txt").string());
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& row : rows) {
+    const cv::Mat mask = cv::imread((dir.path() / row.fields[1]).string(), cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(mask.type(), CV_8UC1) << row.fields[1];
+    EXPECT_EQ(mask.size(), cv::Size(640, 480)) << row.fields[1];
+  }
+  // A synthetic room has nothing void and writes no list.
+  const TempDir room_dir("ddl_room_no_void");
+  write_sequence(*make_sequence_source(small_config("syn_static_static", 2)), room_dir.str());
+  EXPECT_FALSE(fs::exists(room_dir.path() / "void_mask.txt"));
+  EXPECT_FALSE(fs::exists(room_dir.path() / "void_mask"));
+}
+
+#ifdef DDL_HAVE_SEGMENTATION
+// fr1_rpy shows a man seated at the far desk: a person, so DDL-SLAM rightly masks him, but not
+// part of the composite's dynamic truth. The preset's void box must cover what the CNN takes for
+// a person on the real frames (outside the drawn people), and only about that.
+TEST(Sequence, CompositeVoidCoversTheRealSeatedMan) {
+  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
+  const segmentation::SegmenterConfig seg_config;
+  if (!fs::exists(background + "/groundtruth.txt")) {
+    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
+  }
+  if (!fs::exists(fs::path(testing::shared_dir()) / seg_config.model_path)) {
+    GTEST_SKIP() << "segmentation model not found in " << testing::shared_dir();
+  }
+  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
+  config.background_dir = background;
+  config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  ASSERT_FALSE(config.void_boxes_w.empty());
+  const auto source = make_sequence_source(config);
+  const auto segmenter = segmentation::make_segmenter(seg_config, testing::shared_dir());
+  const int kPerson = 15;  // PASCAL VOC
+  long person_px = 0, person_in_void = 0, void_px = 0;
+  // Frames where the man is in view, some partly behind a drawn person (237, 643).
+  for (const std::size_t i : {148u, 237u, 313u, 533u, 643u, 683u}) {
+    const FrameData f = source->render_frame(i);
+    ASSERT_FALSE(f.void_mask.empty());
+    cv::Mat both;
+    cv::bitwise_and(f.void_mask, f.dynamic_mask, both);
+    EXPECT_EQ(cv::countNonZero(both), 0) << "frame " << i << ": a drawn person is scored";
+    const cv::Mat labels = segmenter->segment(f.background_rgb, "").labels;
+    cv::Mat person = labels == kPerson;
+    person.setTo(0, f.dynamic_mask);
+    cv::Mat covered;
+    cv::bitwise_and(person, f.void_mask, covered);
+    person_px += cv::countNonZero(person);
+    person_in_void += cv::countNonZero(covered);
+    void_px += cv::countNonZero(f.void_mask);
+  }
+  ASSERT_GT(person_px, 10000);
+  EXPECT_GT(static_cast<double>(person_in_void) / static_cast<double>(person_px), 0.85);
+  EXPECT_LT(void_px, 3 * person_in_void) << "the void is much larger than the man";
+  // Frames of the first second look at the desk, away from him: nothing void.
+  EXPECT_EQ(cv::countNonZero(source->render_frame(10).void_mask), 0);
+}
+#endif
+
 TEST(Sequence, PresetsMirrorTheBenchmarkRows) {
   std::set<std::string> names;
   for (const auto& p : presets()) {
@@ -286,6 +359,23 @@ TEST(Sequence, PresetsMirrorTheBenchmarkRows) {
   SequenceConfig bad = find_preset("syn_static_xyz").config;
   bad.depth_stamp_jitter_s = 0.02;
   EXPECT_THROW(bad.validate(), ConfigError);
+  // Void boxes: only a composite has real content to leave unscored; bounds must be ordered.
+  auto void_error = [](const SequenceConfig& c) -> std::string {
+    try {
+      c.validate();
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  SequenceConfig room = find_preset("syn_static_xyz").config;
+  room.void_boxes_w = {{Vec3d(0, 0, 0), Vec3d(1, 1, 1)}};
+  EXPECT_NE(void_error(room).find("void_boxes_w"), std::string::npos);
+  SequenceConfig composite = find_preset("composite_fr1_rpy_walking").config;
+  composite.background_dir = "/somewhere";
+  EXPECT_EQ(void_error(composite), "");
+  composite.void_boxes_w.push_back({Vec3d(0, 0, 1), Vec3d(1, 1, 1)});
+  EXPECT_NE(void_error(composite).find("void_boxes_w[1]"), std::string::npos);
 }
 
 TEST(Sequence, MissingBackgroundIsAClearInputError) {

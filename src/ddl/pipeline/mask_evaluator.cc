@@ -45,6 +45,26 @@ Vec3d vec3(const nlohmann::json& j, const std::string& path, const std::string& 
   return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
 }
 
+/// The rows of a mask list ("timestamp filename", '#' comments), sorted by stamp.
+std::vector<std::pair<double, std::string>> read_mask_list(const fs::path& list) {
+  std::vector<std::pair<double, std::string>> rows;
+  for (const io::TextRow& row : io::read_text_table(list.string())) {
+    if (row.fields.size() != 2) {
+      throw InputError::at_line(list.string(), row.line, "expected 'timestamp filename'");
+    }
+    rows.emplace_back(io::parse_double(row.fields[0], list.string(), row.line), row.fields[1]);
+  }
+  std::sort(rows.begin(), rows.end());
+  return rows;
+}
+
+/// The file of `list` at `stamp_s`, or nullptr.
+const std::string* mask_file(const std::vector<std::pair<double, std::string>>& list,
+                             double stamp_s) {
+  const std::ptrdiff_t i = find_stamp(list, stamp_s, [](const auto& e) { return e.first; });
+  return i < 0 ? nullptr : &list[static_cast<std::size_t>(i)].second;
+}
+
 }  // namespace
 
 std::optional<MovedObjectRegion> MovedObjectRegion::load(const std::string& sequence_dir,
@@ -146,38 +166,52 @@ std::unique_ptr<MaskEvaluator> MaskEvaluator::open(const std::string& sequence_d
   const fs::path list = fs::path(sequence_dir) / "dynamic_mask.txt";
   if (!fs::exists(list)) return nullptr;
   std::unique_ptr<MaskEvaluator> e(new MaskEvaluator(sequence_dir, stored_camera));
-  for (const io::TextRow& row : io::read_text_table(list.string())) {
-    if (row.fields.size() != 2) {
-      throw InputError::at_line(list.string(), row.line, "expected 'timestamp filename'");
-    }
-    e->truth_.emplace_back(io::parse_double(row.fields[0], list.string(), row.line), row.fields[1]);
-  }
-  std::sort(e->truth_.begin(), e->truth_.end());
+  e->truth_ = read_mask_list(list);
+  const fs::path void_list = fs::path(sequence_dir) / "void_mask.txt";
+  if (fs::exists(void_list)) e->void_ = read_mask_list(void_list);
   // The box region is drawn with the undistorted camera (synthetic rooms have no distortion).
   e->moved_object_ = MovedObjectRegion::load(sequence_dir, stored_camera.undistorted());
-  spdlog::info("mask evaluation against {} ({} masks{})", list.string(), e->truth_.size(),
+  spdlog::info("mask evaluation against {} ({} masks{}{})", list.string(), e->truth_.size(),
+               e->void_.empty() ? "" : fmt::format(", {} void masks", e->void_.size()),
                e->moved_object_ ? ", moved object from meta.json" : "");
   return e;
 }
 
-const std::string* MaskEvaluator::truth_file(double stamp_s) const {
-  const std::ptrdiff_t i = find_stamp(truth_, stamp_s, [](const auto& e) { return e.first; });
-  return i < 0 ? nullptr : &truth_[static_cast<std::size_t>(i)].second;
+cv::Mat MaskEvaluator::read_mask(const std::string& file) const {
+  const fs::path path = fs::path(sequence_dir_) / file;
+  const cv::Mat mask = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+  if (mask.empty()) throw InputError::at(path.string(), "cannot read the mask");
+  return undistorter_.undistort_depth(mask);
 }
 
 void MaskEvaluator::add(const io::RgbdFrame& frame, const DynamicMasks& masks) {
-  const std::string* file = truth_file(frame.timestamp_s);
+  const std::string* file = mask_file(truth_, frame.timestamp_s);
   if (file == nullptr) {
     ++frames_without_truth_;
     return;
   }
-  const fs::path path = fs::path(sequence_dir_) / *file;
-  cv::Mat truth = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
-  if (truth.empty()) throw InputError::at(path.string(), "cannot read the ground-truth mask");
-  truth = undistorter_.undistort_depth(truth);
-  cnn_.add(eval::count_mask_pixels(masks.cnn, truth));
-  geometry_.add(eval::count_mask_pixels(masks.geometry, truth));
-  combined_.add(eval::count_mask_pixels(masks.combined, truth));
+  const cv::Mat truth = read_mask(*file);
+  // Scored pixels: all but the void ones (none without a void list).
+  cv::Mat scored;
+  if (!void_.empty()) {
+    const std::string* void_file = mask_file(void_, frame.timestamp_s);
+    if (void_file == nullptr) {
+      throw InputError::at((fs::path(sequence_dir_) / "void_mask.txt").string(),
+                           fmt::format("no void mask for the frame at {:.6f}, which has a "
+                                       "ground-truth mask",
+                                       frame.timestamp_s));
+    }
+    const cv::Mat void_mask = read_mask(*void_file);
+    if (void_mask.size() != truth.size()) {
+      throw InputError::at((fs::path(sequence_dir_) / *void_file).string(),
+                           "size differs from the ground-truth mask's");
+    }
+    void_pixels_ += static_cast<std::uint64_t>(cv::countNonZero(void_mask));
+    cv::compare(void_mask, 0, scored, cv::CMP_EQ);
+  }
+  cnn_.add(eval::count_mask_pixels(masks.cnn, truth, scored));
+  geometry_.add(eval::count_mask_pixels(masks.geometry, truth, scored));
+  combined_.add(eval::count_mask_pixels(masks.combined, truth, scored));
   if (!moved_object_) return;
   cv::Mat region = moved_object_->region(frame.timestamp_s);
   if (region.empty() || region.size() != truth.size()) return;
@@ -197,11 +231,16 @@ eval::MaskSummary MaskEvaluator::summary(const std::string& source) const {
 }
 
 nlohmann::json MaskEvaluator::to_json() const {
-  nlohmann::json j = {{"truth", (fs::path(sequence_dir_) / "dynamic_mask.txt").string()},
-                      {"frames_without_truth", frames_without_truth_},
-                      {"cnn", eval::to_json(cnn_.summary())},
-                      {"geometry", eval::to_json(geometry_.summary())},
-                      {"combined", eval::to_json(combined_.summary())}};
+  nlohmann::json j = {
+      {"truth", (fs::path(sequence_dir_) / "dynamic_mask.txt").string()},
+      {"frames_without_truth", frames_without_truth_},
+      {"void", void_.empty()
+                   ? nlohmann::json(nullptr)
+                   : nlohmann::json{{"list", (fs::path(sequence_dir_) / "void_mask.txt").string()},
+                                    {"px", void_pixels_}}},
+      {"cnn", eval::to_json(cnn_.summary())},
+      {"geometry", eval::to_json(geometry_.summary())},
+      {"combined", eval::to_json(combined_.summary())}};
   if (moved_object_) {
     auto recall = [](const eval::MaskCounts& c) {
       return c.truth_pixels() > 0 ? nlohmann::json(static_cast<double>(c.true_positive) /

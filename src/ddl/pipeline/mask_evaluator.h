@@ -10,10 +10,15 @@
 // moving, together with the people, and no per-entity mask is written. Its pixels are separated
 // with meta.json (the box's size, per-frame centre, yaw path) and groundtruth.txt (the camera
 // pose): the convex hull of its eight projected corners, grown by a few pixels, intersected with
-// the ground-truth mask (MovedObjectRegion). Recall on those pixels measures what the geometry
-// check adds for a non-a-priori-dynamic object.
+// the ground-truth mask (MovedObjectRegion).
+//
+// Void: a composite whose real frames show an a-priori dynamic class that is not part of the
+// dynamic truth (fr1_rpy's seated man) lists void_mask/<rgb stamp>.png in void_mask.txt, 255 =
+// not scored. Those pixels count neither as true nor as false in any score (PASCAL VOC's void).
+// Recall on those pixels measures what the geometry check adds for a non-a-priori-dynamic object.
 // Thread-safety: not synchronised; one thread feeds it.
 
+#include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -72,7 +77,7 @@ class MaskEvaluator {
   /// counted in frames_without_truth. Throws ddl::InputError naming an unreadable mask file.
   void add(const io::RgbdFrame& frame, const DynamicMasks& masks);
 
-  /// {truth, frames_without_truth, cnn, geometry, combined[, moved_object]}, see
+  /// {truth, frames_without_truth, void, cnn, geometry, combined[, moved_object]}, see
   /// docs/evaluation.md.
   nlohmann::json to_json() const;
 
@@ -80,10 +85,13 @@ class MaskEvaluator {
 
  private:
   MaskEvaluator(std::string sequence_dir, const camera::PinholeCamera& stored_camera);
-  const std::string* truth_file(double stamp_s) const;
+  /// The mask `file` (relative to the sequence), undistorted like the frames.
+  cv::Mat read_mask(const std::string& file) const;
 
   std::string sequence_dir_;
   std::vector<std::pair<double, std::string>> truth_;  // (stamp, relative path), by stamp
+  std::vector<std::pair<double, std::string>> void_;   // void_mask.txt, the same; may be empty
+  std::uint64_t void_pixels_ = 0;                      // void pixels over the scored frames
   camera::Undistorter undistorter_;
   std::optional<MovedObjectRegion> moved_object_;
   std::size_t frames_without_truth_ = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
 #include "ddl/io/trajectory_io.h"
@@ -33,6 +34,34 @@ bool interpolate_pose(const io::Trajectory& gt, double stamp, SE3& out) {
   const double s = span > 0 ? (stamp - prev->timestamp_s) / span : 0.0;
   out = interpolate(prev->T_w_c(), it->T_w_c(), s);
   return true;
+}
+
+/// The void mask of a composite frame: real pixels whose measured point (`depth_m`, along the
+/// renderer's ray of the pixel, camera -> world by `T_w_c`) lies in one of `boxes`, grown by
+/// `grow_px`, minus the dynamic mask (a person drawn in front is scored).
+cv::Mat void_mask_of(const cv::Mat& depth_m, const Renderer& renderer, const SE3& T_w_c,
+                     const std::vector<WorldBox>& boxes, int grow_px, const cv::Mat& dynamic_mask) {
+  cv::Mat mask(depth_m.size(), CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < depth_m.rows; ++v) {
+    const float* z = depth_m.ptr<float>(v);
+    auto* out = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (z[u] <= 0.0f) continue;
+      const Vec3d p_w = T_w_c * (static_cast<double>(z[u]) * renderer.ray(u, v));
+      for (const WorldBox& box : boxes) {
+        if (box.contains(p_w)) {
+          out[u] = 255;
+          break;
+        }
+      }
+    }
+  }
+  if (grow_px > 0) {
+    cv::dilate(mask, mask,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * grow_px + 1, 2 * grow_px + 1}));
+  }
+  mask.setTo(0, dynamic_mask);
+  return mask;
 }
 
 class CompositeSequence final : public SequenceSource {
@@ -156,6 +185,10 @@ class CompositeSequence final : public SequenceSource {
         exact[u] = z[u];
         ++dynamic_pixels;
       }
+    }
+    if (!config_.void_boxes_w.empty()) {
+      f.void_mask = void_mask_of(surface_m, renderer_, f.T_w_c, config_.void_boxes_w,
+                                 config_.void_grow_px, f.dynamic_mask);
     }
     f.rgb = f.background_rgb.clone();
     cv::Mat cos_incidence;

@@ -46,6 +46,15 @@ enum class PeopleScenario {
 std::string to_string(PeopleScenario scenario);
 PeopleScenario parse_people_scenario(const std::string& text, const std::string& key = "people");
 
+/// An axis-aligned box in the world frame (bounds included).
+struct WorldBox {
+  Vec3d min_w = Vec3d::Zero();
+  Vec3d max_w = Vec3d::Zero();
+  bool contains(const Vec3d& p_w) const {
+    return (p_w.array() >= min_w.array()).all() && (p_w.array() <= max_w.array()).all();
+  }
+};
+
 /// Generic photos without people or animals that Debian's opencv-doc package ships, used as
 /// posters by default (docs/synthetic.md lists them and their licence). Missing files are skipped
 /// by the room builder (procedural posters instead).
@@ -80,6 +89,13 @@ struct SequenceConfig {
   camera::PinholeCamera background_camera = tum1_camera();  // composite: camera of that sequence
   double walker_distance_near_m = 1.3;  // composite: distance of the near walker's line
   double walker_distance_far_m = 1.9;   // composite: distance of the far walker's line
+  /// Composite: boxes (world frame) around what the real sequence shows of an a-priori dynamic
+  /// class that is not part of the dynamic truth, such as a person sitting in the background.
+  /// Real pixels whose measured point lies in a box, grown by void_grow_px and minus the dynamic
+  /// mask, are void: written to void_mask/ and left out of the mask scores (PASCAL VOC's "void"
+  /// label), since a system that masks a person there is right to do so.
+  std::vector<WorldBox> void_boxes_w;
+  int void_grow_px = 4;  // covers depth dropouts at the outline (hair, edges)
 
   /// Throws ddl::ConfigError naming the key.
   void validate() const;
@@ -115,10 +131,11 @@ struct FrameData {
   double rgb_stamp_s = 0.0;
   double depth_stamp_s = 0.0;
   SE3 T_w_c;
-  cv::Mat rgb;                       // CV_8UC3 BGR
-  cv::Mat depth_raw;                 // CV_16UC1, metres x depth_factor, 0 = no measurement
-  cv::Mat dynamic_mask;              // CV_8UC1, 255 where a dynamic entity is visible
-  cv::Mat background_rgb;            // CV_8UC3, the frame without dynamic entities
+  cv::Mat rgb;             // CV_8UC3 BGR
+  cv::Mat depth_raw;       // CV_16UC1, metres x depth_factor, 0 = no measurement
+  cv::Mat dynamic_mask;    // CV_8UC1, 255 where a dynamic entity is visible
+  cv::Mat void_mask;       // CV_8UC1, 255 = not scored (SequenceConfig::void_boxes_w); else empty
+  cv::Mat background_rgb;  // CV_8UC3, the frame without dynamic entities
   cv::Mat background_depth_raw;      // CV_16UC1
   cv::Mat depth_exact_m;             // CV_32FC1 rendered depth before the sensor model (0 = none)
   cv::Mat background_depth_exact_m;  // CV_32FC1 (composite: the real depth in metres)
@@ -157,6 +174,7 @@ struct WriteOptions {
 /// Writes the whole sequence into `out_dir` (created; existing files are overwritten):
 ///   rgb/ depth/ dynamic_mask/ background/rgb/ background/depth/  (PNG, named <stamp>.png)
 ///   rgb.txt depth.txt associations.txt groundtruth.txt dynamic_mask.txt
+///   void_mask/ void_mask.txt  (only when the source has void boxes)
 ///   background/rgb.txt background/depth.txt background/associations.txt
 ///   camera.yaml meta.json
 /// Throws ddl::InputError naming a file that cannot be written; ddl::Interrupted when stopped

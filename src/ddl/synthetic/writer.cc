@@ -51,7 +51,7 @@ std::string camera_yaml(const camera::PinholeCamera& c) {
 }
 
 struct Lists {
-  std::string rgb, depth, assoc, mask, bg_rgb, bg_depth, bg_assoc;
+  std::string rgb, depth, assoc, mask, void_mask, bg_rgb, bg_depth, bg_assoc;
   nlohmann::json frames = nlohmann::json::array();
 };
 
@@ -68,6 +68,12 @@ void write_indices(const SequenceSource& source, const fs::path& out, const List
   write_text((out / "dynamic_mask.txt").string(),
              "# dynamic masks (255 = dynamic object visible), one per RGB frame\n" + file +
                  "# timestamp filename\n" + lists.mask);
+  if (!source.config().void_boxes_w.empty()) {
+    write_text((out / "void_mask.txt").string(),
+               "# void masks (255 = not scored: real content of an a-priori dynamic class that is "
+               "not part of the dynamic truth), one per RGB frame\n" +
+                   file + "# timestamp filename\n" + lists.void_mask);
+  }
   write_text(
       (out / "background" / "rgb.txt").string(),
       "# color images without dynamic objects\n" + file + "# timestamp filename\n" + lists.bg_rgb);
@@ -92,6 +98,10 @@ void write_indices(const SequenceSource& source, const fs::path& out, const List
                        {{"dynamic_mask",
                          "255 where a person, or the movable object from the start of its move "
                          "on, is visible in the RGB frame"},
+                        {"void_mask",
+                         "255 where a pixel is not scored: real content of an a-priori dynamic "
+                         "class (a person sitting in the real sequence) that is not part of the "
+                         "dynamic truth; only composites with void boxes write it"},
                         {"background",
                          "the frame rendered without the entities dynamic in it; same sensor "
                          "noise, so RGB equals the frame outside the mask and depth equals it "
@@ -129,7 +139,10 @@ void write_sequence(const SequenceSource& source, const std::string& out_dir,
                     const WriteOptions& options) {
   const fs::path out(out_dir);
   std::error_code ec;
-  for (const char* sub : {"rgb", "depth", "dynamic_mask", "background/rgb", "background/depth"}) {
+  const bool with_void = !source.config().void_boxes_w.empty();
+  for (const char* sub :
+       {"rgb", "depth", "dynamic_mask", "void_mask", "background/rgb", "background/depth"}) {
+    if (!with_void && std::string(sub) == "void_mask") continue;
     fs::create_directories(out / sub, ec);
     if (ec) throw InputError::at((out / sub).string(), "cannot create folder: " + ec.message());
   }
@@ -161,6 +174,8 @@ void write_sequence(const SequenceSource& source, const std::string& out_dir,
     lists.depth += ds + " " + depth_rel + "\n";
     lists.assoc += rs + " " + rgb_rel + " " + ds + " " + depth_rel + "\n";
     lists.mask += rs + " " + mask_rel + "\n";
+    const std::string void_rel = "void_mask/" + rs + ".png";
+    if (with_void) lists.void_mask += rs + " " + void_rel + "\n";
     lists.bg_rgb += rs + " " + rgb_rel + "\n";
     lists.bg_depth += ds + " " + depth_rel + "\n";
     lists.bg_assoc += rs + " " + rgb_rel + " " + ds + " " + depth_rel + "\n";
@@ -178,11 +193,18 @@ void write_sequence(const SequenceSource& source, const std::string& out_dir,
                             {"dynamic_fraction", frame->dynamic_fraction},
                             {"entities", entities}});
     finish_pending();
-    pending[0] = std::async(std::launch::async, [frame, out, rgb_rel, depth_rel, mask_rel, level] {
-      write_png((out / rgb_rel).string(), frame->rgb, level);
-      write_png((out / depth_rel).string(), frame->depth_raw, level);
-      write_png((out / mask_rel).string(), frame->dynamic_mask, level);
-    });
+    if (with_void && frame->void_mask.empty()) {
+      throw Error("composite source with void boxes returned no void mask for frame " +
+                  std::to_string(i));
+    }
+    pending[0] = std::async(std::launch::async,
+                            [frame, out, rgb_rel, depth_rel, mask_rel, void_rel, with_void, level] {
+                              write_png((out / rgb_rel).string(), frame->rgb, level);
+                              write_png((out / depth_rel).string(), frame->depth_raw, level);
+                              write_png((out / mask_rel).string(), frame->dynamic_mask, level);
+                              if (with_void)
+                                write_png((out / void_rel).string(), frame->void_mask, level);
+                            });
     pending[1] = std::async(std::launch::async, [frame, out, rgb_rel, depth_rel, level] {
       write_png((out / "background" / rgb_rel).string(), frame->background_rgb, level);
       write_png((out / "background" / depth_rel).string(), frame->background_depth_raw, level);
