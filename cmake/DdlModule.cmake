@@ -17,6 +17,7 @@ function(ddl_add_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(test_${name} ${ARG_SOURCES})
   target_link_libraries(test_${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  target_include_directories(test_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/common)
   target_compile_definitions(test_${name} PRIVATE
     DDL_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     DDL_DEFAULT_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")

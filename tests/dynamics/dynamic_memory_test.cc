@@ -4,6 +4,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/synthetic/sequence.h"
@@ -223,12 +224,8 @@ TEST(DynamicMemory, SpillOntoSurfacesAKeyframeSawAsStaticIsNotRemembered) {
 TEST(DynamicMemory, ConfigErrorsNameTheKey) {
   DynamicMemoryConfig config;
   config.max_age_frames = 0;
-  try {
-    config.validate();
-    FAIL() << "expected ConfigError";
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("dynamic.memory.max_age_frames"), std::string::npos);
-  }
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.memory.max_age_frames"));
   config = {};
   config.max_depth_m = config.min_depth_m;
   EXPECT_THROW(config.validate(), ConfigError);

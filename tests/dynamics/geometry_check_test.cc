@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/synthetic/depth_model.h"
@@ -424,12 +425,8 @@ TEST(MaskFusion, CombineAndScore) {
 TEST(GeometryCheck, ConfigErrorsNameTheKey) {
   GeometryCheckConfig config;
   config.max_parallax_deg = 0;
-  try {
-    config.validate();
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("dynamics.max_parallax_deg"), std::string::npos);
-  }
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamics.max_parallax_deg"));
   GeometryCheckConfig gate;
   gate.max_median_residual_ratio = 0;
   EXPECT_THROW(gate.validate(), ConfigError);

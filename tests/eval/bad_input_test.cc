@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/eval/evaluate.h"
 #include "eval_test_support.h"
@@ -130,12 +131,7 @@ TEST_F(BadInputTest, MalformedFramesFileNamesFileAndLine) {
 TEST_F(BadInputTest, BadOptionsNameTheKey) {
   EvalOptions o;
   o.rpe_delta = 0.0;
-  try {
-    evaluate(inputs_, o);
-    ADD_FAILURE() << "no ConfigError";
-  } catch (const ConfigError& e) {
-    expect_contains(e.what(), "'delta'");
-  }
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { evaluate(inputs_, o); }, "delta"));
   o = {};
   o.max_difference_s = -1.0;
   EXPECT_THROW(evaluate(inputs_, o), ConfigError);

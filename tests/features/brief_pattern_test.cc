@@ -6,6 +6,7 @@
 #include <set>
 #include <tuple>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/features/orb_extractor.h"
 #include "ddl/features/pattern_learning.h"
@@ -122,23 +123,15 @@ TEST(PatternLearning, SelectsLessBiasedTestsThanRawCandidates) {
 }
 
 TEST(PatternLearning, OptionsNameTheBadKey) {
-  auto message = [](auto mutate) {
+  auto rejects = [](auto mutate, const std::string& key) {
     PatternLearningOptions o;
     mutate(o);
-    try {
-      o.validate();
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+    return test_support::throws_config_error_for_key([&] { o.validate(); }, key);
   };
-  EXPECT_NE(message([](auto& o) { o.num_candidates = 10; }).find("pattern_learning.num_candidates"),
-            std::string::npos);
-  EXPECT_NE(message([](auto& o) { o.max_bias = 0.0; }).find("pattern_learning.max_bias"),
-            std::string::npos);
-  EXPECT_NE(
-      message([](auto& o) { o.correlation_step = -1; }).find("pattern_learning.correlation_step"),
-      std::string::npos);
+  EXPECT_TRUE(rejects([](auto& o) { o.num_candidates = 10; }, "pattern_learning.num_candidates"));
+  EXPECT_TRUE(rejects([](auto& o) { o.max_bias = 0.0; }, "pattern_learning.max_bias"));
+  EXPECT_TRUE(
+      rejects([](auto& o) { o.correlation_step = -1; }, "pattern_learning.correlation_step"));
 }
 
 TEST(PatternLearning, TooFewKeypointsIsAnInputError) {

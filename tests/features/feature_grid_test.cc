@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <random>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 
 namespace ddl::features {
@@ -70,17 +71,13 @@ TEST(FeatureGrid, EmptyGridAndDegenerateQueries) {
 }
 
 TEST(FeatureGrid, BadArgumentsNameTheKey) {
-  auto message = [](int cols, int rows, cv::Rect2f bounds) {
-    try {
-      FeatureGrid grid({}, bounds, cols, rows);
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
+  auto rejects = [](int cols, int rows, cv::Rect2f bounds, const std::string& key) {
+    return test_support::throws_config_error_for_key(
+        [&] { FeatureGrid grid({}, bounds, cols, rows); }, key);
   };
-  EXPECT_NE(message(0, 48, {0, 0, 640, 480}).find("grid.cols"), std::string::npos);
-  EXPECT_NE(message(64, -1, {0, 0, 640, 480}).find("grid.rows"), std::string::npos);
-  EXPECT_NE(message(64, 48, {0, 0, 0, 480}).find("grid.bounds"), std::string::npos);
+  EXPECT_TRUE(rejects(0, 48, {0, 0, 640, 480}, "grid.cols"));
+  EXPECT_TRUE(rejects(64, -1, {0, 0, 640, 480}, "grid.rows"));
+  EXPECT_TRUE(rejects(64, 48, {0, 0, 0, 480}, "grid.bounds"));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <random>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 
 namespace ddl::features {
@@ -135,12 +136,8 @@ TEST(Matcher, MaxDistanceIsInclusive) {
 TEST(Matcher, BadInputsAreReported) {
   BruteForceMatchOptions options;
   options.ratio = 1.5f;
-  try {
-    options.validate();
-    ADD_FAILURE();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("match.ratio"), std::string::npos);
-  }
+  EXPECT_TRUE(
+      test_support::throws_config_error_for_key([&] { options.validate(); }, "match.ratio"));
   options = {};
   options.max_distance = 300;
   EXPECT_THROW(options.validate(), ConfigError);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/synthetic/sequence.h"
 
@@ -249,12 +250,8 @@ TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
 TEST(Inpainting, ConfigErrorsNameTheKey) {
   InpaintingConfig config;
   config.num_keyframes = 0;
-  try {
-    config.validate();
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("inpainting.num_keyframes"), std::string::npos);
-  }
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "inpainting.num_keyframes"));
 }
 
 }  // namespace

@@ -1,18 +1,14 @@
 #include <gtest/gtest.h>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/loop/loop_closer_config.h"
 
 namespace ddl::loop {
 namespace {
 
-void expect_key_error(const LoopCloserConfig& config, const std::string& key) {
-  try {
-    config.validate();
-    FAIL() << "expected a ConfigError for " << key;
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("'" + key + "'"), std::string::npos) << e.what();
-  }
+::testing::AssertionResult rejects(const LoopCloserConfig& config, const std::string& key) {
+  return test_support::throws_config_error_for_key([&] { config.validate(); }, key);
 }
 
 TEST(LoopCloserConfig, DefaultsAreValid) { EXPECT_NO_THROW(LoopCloserConfig{}.validate()); }
@@ -20,22 +16,22 @@ TEST(LoopCloserConfig, DefaultsAreValid) { EXPECT_NO_THROW(LoopCloserConfig{}.va
 TEST(LoopCloserConfig, BadValuesNameTheirKey) {
   LoopCloserConfig c;
   c.bf = -1.0;
-  expect_key_error(c, "loop.bf");
+  EXPECT_TRUE(rejects(c, "loop.bf"));
   c = {};
   c.detection.consistency_threshold = -1;
-  expect_key_error(c, "loop.detection.consistency_threshold");
+  EXPECT_TRUE(rejects(c, "loop.detection.consistency_threshold"));
   c = {};
   c.verification.ransac_probability = 1.0;
-  expect_key_error(c, "loop.verification.ransac_probability");
+  EXPECT_TRUE(rejects(c, "loop.verification.ransac_probability"));
   c = {};
   c.verification.min_loop_matches = 0;
-  expect_key_error(c, "loop.verification.min_loop_matches");
+  EXPECT_TRUE(rejects(c, "loop.verification.min_loop_matches"));
   c = {};
   c.correction.essential_graph_min_weight = 0;
-  expect_key_error(c, "loop.correction.essential_graph_min_weight");
+  EXPECT_TRUE(rejects(c, "loop.correction.essential_graph_min_weight"));
   c = {};
   c.optimizer.pose_graph_iterations = 0;
-  expect_key_error(c, "loop.optimizer.pose_graph_iterations");
+  EXPECT_TRUE(rejects(c, "loop.optimizer.pose_graph_iterations"));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <set>
 #include <tuple>
 
+#include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/synthetic/sequence.h"
 
@@ -161,12 +162,8 @@ TEST(OctreeMap, ReadingExpandsPrunedLeavesIntoVoxels) {
 TEST(OctreeMap, ConfigErrorsNameTheKey) {
   OctreeConfig config;
   config.resolution_m = 0;
-  try {
-    config.validate();
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("octomap.resolution_m"), std::string::npos);
-  }
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "octomap.resolution_m"));
 }
 
 }  // namespace
