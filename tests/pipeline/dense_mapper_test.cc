@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 
 #include "ddl/map/map.h"
 #include "ddl/synthetic/sequence.h"
@@ -45,6 +46,60 @@ TEST(DenseMapper, LeavesTheSubmittedImagesAndMaskUntouched) {
     }
     dense.finish();
     EXPECT_EQ(dense.stats().keyframes, 3u);
+  }
+}
+
+// A map reset (tracking lost while the map was young) starts a new world frame: the keyframes
+// stored before it must neither fill later keyframes nor stay in the octree. Until 2026-11-26 the
+// dense stage was not told, and pasted old-frame pixels and kept old-frame voxels.
+TEST(DenseMapper, AMapResetDropsTheStoredKeyframesAndTheOctree) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  auto keyframe_images = [&](int k, bool masked) {
+    cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40 + 30 * k, 80, 120));
+    cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f + 0.3f * k));
+    cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    if (masked) {
+      cv::rectangle(mask, cv::Rect(260, 180, 100, 120), cv::Scalar(255), cv::FILLED);
+      depth.setTo(1.0f, mask);
+    }
+    return std::make_tuple(bgr, depth, mask);
+  };
+  for (const bool threaded : {false, true}) {
+    auto run = [&](bool with_old_keyframes, bool reset) {
+      auto map = std::make_shared<map::Map>();
+      DenseMapperConfig config;
+      config.threaded = threaded;
+      config.mask_border_px = 0;
+      auto dense = std::make_unique<DenseMapper>(config, camera, map);
+      auto submit = [&](int k, bool masked) {
+        auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
+                                                  std::make_shared<map::FrameFeatures>(), SE3());
+        map->add_keyframe(kf);
+        auto [bgr, depth, mask] = keyframe_images(k, masked);
+        dense->submit({kf, bgr, depth, mask});
+      };
+      if (with_old_keyframes) {
+        submit(0, false);
+        submit(1, false);
+      }
+      if (reset) dense->reset();
+      submit(2, true);
+      dense->finish();
+      return dense;
+    };
+    const auto fresh = run(false, false);
+    const auto kept = run(true, false);
+    const auto reset = run(true, true);
+    // Without the reset the old keyframes fill the new keyframe's masked pixels.
+    EXPECT_GT(kept->stats().filled_pixels, 10000) << "threaded " << threaded;
+    EXPECT_EQ(reset->stats().filled_pixels, 0) << "threaded " << threaded;
+    EXPECT_EQ(reset->stats().resets, 1u);
+    EXPECT_EQ(reset->stats().keyframes, 3u);
+    ASSERT_NE(reset->octree(), nullptr);
+    EXPECT_EQ(reset->octree()->stats().scans_integrated, 1u) << "threaded " << threaded;
+    EXPECT_EQ(reset->octree()->stats().occupied_leaves, fresh->octree()->stats().occupied_leaves)
+        << "threaded " << threaded;
+    EXPECT_NE(kept->octree()->stats().occupied_leaves, fresh->octree()->stats().occupied_leaves);
   }
 }
 

@@ -96,5 +96,41 @@ TEST(Relocalization, RecoversAfterBlankFramesAndContinuesOnTheTrueTrajectory) {
   EXPECT_LT(worst_after_deg, 1.5);
 }
 
+// Lost with a young map, tracking resets it and starts a new world frame. Every stage must
+// follow: the octree holds only the keyframes made after the reset (before 2026-11-26 the dense
+// stage kept the old ones, in a frame that no longer exists).
+TEST(Relocalization, AMapResetRestartsTheDenseMapToo) {
+  const auto vocabulary = default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 60));
+  const camera::PinholeCamera& camera = source->camera();
+  SystemConfig config = core_config();
+  config.dense.octomap_enabled = true;
+  config.dense.inpainting_enabled = true;
+  System system(config, camera, vocabulary);
+  std::size_t keyframes_after_reset = 0;
+  bool reset_seen = false;
+  for (std::size_t i = 0; i < source->frame_count(); ++i) {
+    io::RgbdFrame frame = testing::to_rgbd(source->render_frame(i), camera);
+    if (i >= 12 && i < 15) {  // blank frames while the map has a handful of keyframes
+      frame.rgb.setTo(cv::Scalar::all(0));
+      frame.depth_m.setTo(0.0f);
+    }
+    const FrameOutcome outcome = system.process(frame);
+    if (outcome.tracking.map_reset) {
+      reset_seen = true;
+      keyframes_after_reset = 0;
+    }
+    if (reset_seen && outcome.tracking.new_keyframe) ++keyframes_after_reset;
+  }
+  system.finish();
+  const SystemStatistics stats = system.statistics();
+  ASSERT_TRUE(reset_seen) << "precondition: the blank frames reset the young map";
+  EXPECT_EQ(stats.dense.resets, stats.map_resets);
+  ASSERT_GT(keyframes_after_reset, 0u);
+  ASSERT_NE(system.dense_mapper().octree(), nullptr);
+  EXPECT_EQ(system.dense_mapper().octree()->stats().scans_integrated, keyframes_after_reset);
+}
+
 }  // namespace
 }  // namespace ddl::pipeline

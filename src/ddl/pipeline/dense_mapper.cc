@@ -39,7 +39,7 @@ DenseMapper::DenseMapper(const DenseMapperConfig& config, const camera::PinholeC
     octree_ = std::make_unique<octomap::OctreeMap>(config_.octree, camera_);
   if (!config_.save_inpainted_dir.empty()) fs::create_directories(config_.save_inpainted_dir);
   if (config_.threaded) {
-    queue_ = std::make_unique<BoundedQueue<DenseKeyframe>>(config_.queue_capacity);
+    queue_ = std::make_unique<BoundedQueue<Item>>(config_.queue_capacity);
     thread_ = std::thread([this] { worker(); });
   }
 }
@@ -55,7 +55,32 @@ void DenseMapper::submit(DenseKeyframe keyframe) {
     process(std::move(keyframe));
     return;
   }
-  if (!queue_->push(std::move(keyframe)) && error_) std::rethrow_exception(error_);
+  if (!queue_->push(Item(std::move(keyframe))) && error_) std::rethrow_exception(error_);
+}
+
+void DenseMapper::reset() {
+  if (finished_) throw Error("DenseMapper::reset after finish()");
+  if (!queue_) {
+    drop_stored();
+    return;
+  }
+  if (!queue_->push(Item(ResetRequest{})) && error_) std::rethrow_exception(error_);
+}
+
+void DenseMapper::handle(Item item) {
+  if (auto* keyframe = std::get_if<DenseKeyframe>(&item)) {
+    process(std::move(*keyframe));
+  } else {
+    drop_stored();
+  }
+}
+
+void DenseMapper::drop_stored() {
+  stored_.clear();
+  if (octree_) octree_->clear();
+  seen_big_change_ = map_->big_change_index();
+  std::lock_guard lock(stats_mutex_);
+  ++stats_.resets;
 }
 
 void DenseMapper::worker() {
@@ -67,7 +92,7 @@ void DenseMapper::worker() {
   }
 #endif
   try {
-    while (auto item = queue_->pop()) process(std::move(*item));
+    while (auto item = queue_->pop()) handle(std::move(*item));
   } catch (...) {
     error_ = std::current_exception();
     queue_->close();

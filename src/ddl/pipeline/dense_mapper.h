@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
@@ -58,6 +59,7 @@ struct DenseStats {
   long filled_pixels = 0;
   long image_filled_pixels = 0;
   std::size_t octree_rebuilds = 0;
+  std::size_t resets = 0;  // map resets: stored keyframes and the octree dropped
 };
 
 class DenseMapper {
@@ -69,6 +71,11 @@ class DenseMapper {
   DenseMapper& operator=(const DenseMapper&) = delete;
 
   void submit(DenseKeyframe keyframe);
+  /// The map was reset (tracking lost before the map had enough keyframes): the keyframes
+  /// stored so far live in a world frame that no longer exists, so they are dropped as
+  /// inpainting sources and the octree is emptied. Ordered with submit(): in threaded mode it
+  /// travels through the queue behind the keyframes submitted before it.
+  void reset();
   /// Drains the queue, joins the thread, rebuilds the octree once more if poses moved since.
   void finish();
   /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`.
@@ -87,8 +94,12 @@ class DenseMapper {
     cv::Mat exclude;   // unfilled and the border band around the mask: not a source, not mapped
     cv::Mat repaired;  // pixels its own repair filled (a source after observed pixels)
   };
+  struct ResetRequest {};
+  using Item = std::variant<DenseKeyframe, ResetRequest>;
   void worker();
+  void handle(Item item);
   void process(DenseKeyframe item);
+  void drop_stored();
   void rebuild_octree();
 
   DenseMapperConfig config_;
@@ -100,7 +111,7 @@ class DenseMapper {
   TimingStats timings_;
   mutable std::mutex stats_mutex_;
   DenseStats stats_;
-  std::unique_ptr<BoundedQueue<DenseKeyframe>> queue_;
+  std::unique_ptr<BoundedQueue<Item>> queue_;
   std::thread thread_;
   std::exception_ptr error_;
   bool finished_ = false;

@@ -213,6 +213,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     const map::KeyFrameId first_valid_keyframe = map_->next_keyframe_id();
     mapper_->request_reset(first_valid_keyframe);
     loop_closer_->request_reset(first_valid_keyframe);
+    dense_->reset();
   }
 
   if (config_.save_masks && !config_.output_dir.empty() && !outcome.masks.combined.empty()) {
@@ -336,8 +337,18 @@ void System::shutdown_workers(bool wait_for_global_ba) {
 void System::finish() {
   if (finished_) return;
   finished_ = true;
-  shutdown_workers(/*wait_for_global_ba=*/true);
-  dense_->finish();
+  // Every stage is shut down even when one fails (a background global BA that threw, an error of
+  // the dense stage): the dense thread must not outlive finish() while the outputs are written.
+  // The first error is rethrown.
+  auto attempt = [this](auto&& step) {
+    try {
+      step();
+    } catch (...) {
+      store_error(std::current_exception());
+    }
+  };
+  attempt([this] { shutdown_workers(/*wait_for_global_ba=*/true); });
+  attempt([this] { dense_->finish(); });
   std::lock_guard lock(error_mutex_);
   if (worker_error_) std::rethrow_exception(worker_error_);
 }
