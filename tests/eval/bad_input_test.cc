@@ -126,6 +126,26 @@ TEST_F(BadInputTest, MalformedFramesFileNamesFileAndLine) {
   expect_contains(msg, inputs_.frames_path + ":3:");
   inputs_.frames_path = dir_.file("missing_rgb.txt");
   expect_contains(input_error_of(inputs_), inputs_.frames_path);
+  // A NaN stamp used to pass and break the de-duplication (a wrong tracked ratio).
+  inputs_.frames_path =
+      test::write_text(dir_.file("rgb_nan.txt"), "# rgb\n100.0 rgb/a.png\nnan rgb/b.png\n");
+  const std::string nan_msg = input_error_of(inputs_);
+  expect_contains(nan_msg, inputs_.frames_path + ":3:");
+  expect_contains(nan_msg, "not finite");
+}
+
+// --align-scale against an estimate that never moved: the scale is undefined, an input fault
+// that names both files (it was a plain library error, exit code 1).
+TEST_F(BadInputTest, ScaleAlignmentOfAStillEstimateNamesBothFiles) {
+  std::string still;
+  for (int k = 0; k < 80; ++k) still += fmt::format("{} 1 2 3 0 0 0 1\n", 100.0 + k * 0.03125);
+  test::write_text(inputs_.estimate_path, still);
+  EvalOptions o;
+  o.align_scale = true;
+  const std::string msg = input_error_of(inputs_, o);
+  expect_contains(msg, inputs_.estimate_path);
+  expect_contains(msg, inputs_.groundtruth_path);
+  expect_contains(msg, "scale");
 }
 
 TEST_F(BadInputTest, BadOptionsNameTheKey) {

@@ -245,6 +245,20 @@ TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
   EXPECT_EQ(cv::countNonZero(result.image_filled), 100);
   EXPECT_EQ(cv::countNonZero(result.unfilled), 0);
   EXPECT_GT(cv::countNonZero(result.depth_m(cv::Rect(300, 200, 10, 10))), 99);
+  // A 20 x 20 hole (the largest of max_hole_area_px 400): depth reaches its middle too, so every
+  // pixel counted as filled has depth (eight growth passes used to leave its 4 x 4 core empty).
+  cv::Mat wide = cv::Mat::zeros(cur.depth.size(), CV_8UC1);
+  wide(cv::Rect(300, 200, 20, 20)).setTo(255);
+  const auto wide_result = inpaint(cur.bgr, cur.depth, wide, T_w.inverse(), {}, cam, config);
+  EXPECT_EQ(cv::countNonZero(wide_result.image_filled), 400);
+  EXPECT_EQ(cv::countNonZero(wide_result.unfilled), 0);
+  EXPECT_EQ(cv::countNonZero(wide_result.depth_m(cv::Rect(300, 200, 20, 20))), 400);
+  // A hole inside unknown depth gets colour but stays unfilled: no depth to give it.
+  View blank = render(cam, T_w, false);
+  blank.depth.setTo(0.0f);
+  const auto no_depth = inpaint(blank.bgr, blank.depth, mask, T_w.inverse(), {}, cam, config);
+  EXPECT_EQ(cv::countNonZero(no_depth.image_filled), 0);
+  EXPECT_EQ(cv::countNonZero(no_depth.unfilled), 100);
 }
 
 TEST(Inpainting, ConfigErrorsNameTheKey) {

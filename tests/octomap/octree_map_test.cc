@@ -41,9 +41,57 @@ KeyframeScan wall_scan(bool with_person, std::uint64_t id) {
   return scan;
 }
 
-bool occupied(const ::octomap::OcTree& tree, double x, double y, double z) {
+template <typename Tree>
+bool occupied(const Tree& tree, double x, double y, double z) {
   const auto* node = tree.search(x, y, z);
   return node != nullptr && tree.isNodeOccupied(node);
+}
+
+// max_range_m bounds the ray, as in OctoMap: a wall at z = 3.9 m with max range 4 m is mapped
+// where its rays are shorter than 4 m (the image centre), not at the corners (rays up to 4.8 m);
+// and a ray beyond the range still clears the space in front of it. Until 2026-11-26 depth z was
+// compared: the corners' endpoints were silently dropped by OctoMap while counted as in range,
+// and rays with z beyond the range were skipped, so they cleared nothing (a person who walked
+// away in front of a far wall stayed in the map).
+TEST(OctreeMap, MaxRangeBoundsTheRayAndLongerRaysStillClear) {
+  const auto cam = synthetic::tum3_camera();
+  OctreeConfig config;
+  config.resolution_m = 0.05;
+  config.max_range_m = 4.0;
+  auto wall_at = [&](float z) {
+    KeyframeScan scan;
+    scan.bgr = cv::Mat(cam.height, cam.width, CV_8UC3, cv::Scalar(200, 100, 50));
+    scan.depth_m = cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(z));
+    return scan;
+  };
+  OctreeMap near_range(config, cam);
+  near_range.integrate(wall_at(3.9f));
+  OctreeConfig far_config = config;
+  far_config.max_range_m = 8.0;
+  OctreeMap far_range(far_config, cam);
+  far_range.integrate(wall_at(3.9f));
+  // The wall's occupied voxels: the rays shorter than 4 m cover the middle of the wall only.
+  const auto occupied_near = near_range.stats().occupied_leaves;
+  const auto occupied_far = far_range.stats().occupied_leaves;
+  EXPECT_GT(occupied_near, 0u);
+  EXPECT_LT(occupied_near, occupied_far);
+  EXPECT_TRUE(occupied(near_range.tree(), 0.0, 0.0, 3.9));  // centre ray: 3.9 m
+  // Corner ray (u, v) = (0, 0): at z = 3.9 m it is longer than 4 m.
+  const Vec3d corner = cam.unproject(0, 0, 3.9);
+  ASSERT_GT(corner.norm(), 4.0);
+  EXPECT_FALSE(occupied(near_range.tree(), corner.x(), corner.y(), corner.z()));
+  EXPECT_TRUE(occupied(far_range.tree(), corner.x(), corner.y(), corner.z()));
+
+  // A person at 2 m in front of a wall at 4.5 m (beyond the range), then the wall alone: the
+  // truncated rays clear the person's voxels.
+  OctreeMap map(config, cam);
+  KeyframeScan person = wall_at(4.5f);
+  person.depth_m(cv::Rect(280, 200, 80, 80)).setTo(2.0f);
+  map.integrate(person);
+  const Vec3d person_centre = cam.unproject(320, 240, 2.0);
+  ASSERT_TRUE(occupied(map.tree(), person_centre.x(), person_centre.y(), person_centre.z()));
+  for (int k = 0; k < 4; ++k) map.integrate(wall_at(4.5f));
+  EXPECT_FALSE(occupied(map.tree(), person_centre.x(), person_centre.y(), person_centre.z()));
 }
 
 TEST(OctreeMap, WallIsOccupiedAndSpaceInFrontIsFree) {
@@ -81,6 +129,49 @@ TEST(OctreeMap, ExcludedPixelsAreNotInserted) {
   map.integrate(scan);
   const auto* node = map.tree().search(0.0, 0.0, 1.5);
   EXPECT_TRUE(node == nullptr || !map.tree().isNodeOccupied(node));
+}
+
+// A full disk and a cut-off file are clear errors naming the file. OctoMap's write(filename)
+// reports success whatever happened, and its readers took a cut-off .ot for a smaller map (wrong
+// voxels) or died in std::bad_alloc (found by review, 2026-11-26).
+TEST(OctreeMap, FullDiskAndCutOffMapFilesAreClearErrors) {
+  OctreeMap map(OctreeConfig{}, synthetic::tum3_camera());
+  map.integrate(wall_scan(true, 0));
+  if (fs::exists("/dev/full")) {
+    for (auto write : {&OctreeMap::write_ot, &OctreeMap::write_bt, &OctreeMap::write_ply}) {
+      try {
+        (map.*write)("/dev/full");
+        ADD_FAILURE() << "no error writing to /dev/full";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("/dev/full"), std::string::npos) << e.what();
+      }
+    }
+  }
+  const fs::path dir = fs::temp_directory_path() / "ddl_octomap_cut_test";
+  fs::create_directories(dir);
+  for (const std::string name : {"map.ot", "map.bt"}) {
+    const fs::path whole = dir / name;
+    if (name == "map.ot") {
+      map.write_ot(whole.string());
+    } else {
+      map.write_bt(whole.string());
+    }
+    const auto size = fs::file_size(whole);
+    EXPECT_EQ(read_occupied_voxels(whole.string()).centres.size(), map.stats().occupied_leaves);
+    for (const double share : {0.2, 0.5, 0.7, 0.9, 0.99}) {
+      const fs::path cut = dir / ("cut_" + name);
+      fs::copy_file(whole, cut, fs::copy_options::overwrite_existing);
+      fs::resize_file(cut, static_cast<std::uintmax_t>(share * static_cast<double>(size)));
+      try {
+        const auto voxels = read_occupied_voxels(cut.string());
+        ADD_FAILURE() << name << " cut to " << share << " read as " << voxels.centres.size()
+                      << " voxels";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(cut.string()), std::string::npos) << e.what();
+      }
+    }
+  }
+  fs::remove_all(dir);
 }
 
 TEST(OctreeMap, FilesOpenWithTheOctomapLibrary) {

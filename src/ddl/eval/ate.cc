@@ -53,6 +53,13 @@ AteResult compute_ate(const io::Trajectory& gt, const io::Trajectory& est,
     est_xyz.col(k) = est[m.second].t_w_c * options.scale;
   }
 
+  if (options.align_scale && (est_xyz.colwise() - est_xyz.rowwise().mean()).squaredNorm() <= 0.0) {
+    // The estimate's input fault (a tracker that never moved), not the library's: evaluate()
+    // names both files for an InputError.
+    throw InputError(
+        "every matched estimate position is the same point: the scale of the "
+        "alignment (--align-scale) is undefined");
+  }
   r.alignment = options.align_scale ? align_umeyama(est_xyz, r.gt_xyz, /*with_scale=*/true)
                                     : align_horn(est_xyz, r.gt_xyz);
   r.est_xyz_aligned = r.alignment.apply(est_xyz);

@@ -172,11 +172,19 @@ std::vector<std::pair<double, std::string>> list_repaired(const fs::path& dir) {
       continue;
     }
     const std::string stem = name.substr(0, name.size() - suffix.size());
+    // The whole stem must be a finite number: std::stod alone takes "12.5x" as 12.5 and "nan",
+    // which then matched frame 0.
+    double stamp = 0.0;
+    std::size_t used = 0;
     try {
-      out.emplace_back(std::stod(stem), (dir / stem).string());
+      stamp = std::stod(stem, &used);
     } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != stem.size() || !std::isfinite(stamp)) {
       throw InputError::at(entry.path().string(), "repaired keyframe name is not <stamp>_rgb.png");
     }
+    out.emplace_back(stamp, (dir / stem).string());
   }
   std::sort(out.begin(), out.end());
   return out;
@@ -214,7 +222,11 @@ void evaluate_inpainting(const TruthSequence& truth, const DenseEvalOptions& opt
     KeyframeEvaluation k;
     k.frame_index = *index;
     k.stem = stem_path;
-    k.metrics = evaluate_inpainted_frame(in);
+    try {
+      k.metrics = evaluate_inpainted_frame(in);
+    } catch (const std::invalid_argument& e) {  // sizes or types that differ from the sequence's
+      throw InputError::at(stem_path + "_*.png", e.what());
+    }
     k.metrics.timestamp_s = stamp;
     result.total += k.metrics;
     result.keyframes.push_back(std::move(k));

@@ -1,6 +1,7 @@
 #include "ddl/eval/tracked.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "ddl/core/error.h"
@@ -12,7 +13,12 @@ namespace ddl::eval {
 std::vector<double> read_frame_stamps(const std::string& path) {
   std::vector<double> stamps;
   for (const io::TextRow& row : io::read_text_table(path)) {
-    stamps.push_back(io::parse_double(row.fields[0], path, row.line));
+    const double stamp = io::parse_double(row.fields[0], path, row.line);
+    // NaN would break the sort below and with it the de-duplication (a wrong frame count).
+    if (!std::isfinite(stamp)) {
+      throw InputError::at_line(path, row.line, "timestamp '" + row.fields[0] + "' is not finite");
+    }
+    stamps.push_back(stamp);
   }
   if (stamps.empty()) throw InputError::at(path, "no frames (empty frame list)");
   std::sort(stamps.begin(), stamps.end());

@@ -307,17 +307,27 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       cv::Mat filled_bgr;
       cv::inpaint(out.bgr, small, filled_bgr, 3, cv::INPAINT_TELEA);
       filled_bgr.copyTo(out.bgr, small);
-      // Depth: nearest valid neighbour median through a small dilation of the known depth.
+      // Depth: grown in from the known depth around the hole, one pixel ring per pass, until the
+      // hole is full or nothing known touches what is left (a hole inside unknown depth). Eight
+      // passes used to be the limit, which left the middle of holes wider than 16 px without
+      // depth while they counted as filled (found by review, 2026-11-26).
       cv::Mat depth_fill = out.depth_m.clone();
-      for (int iter = 0; iter < 8 && cv::countNonZero(small & (depth_fill == 0)) > 0; ++iter) {
+      int left = cv::countNonZero(small & (depth_fill == 0));
+      while (left > 0) {
         cv::Mat grown;
         cv::dilate(depth_fill, grown, cv::Mat());  // max of neighbours: background-biased
         const cv::Mat holes = small & (depth_fill == 0);
         grown.copyTo(depth_fill, holes);
+        const int now = cv::countNonZero(small & (depth_fill == 0));
+        if (now == left) break;
+        left = now;
       }
       depth_fill.copyTo(out.depth_m, small);
-      out.image_filled = small;
-      unfilled.setTo(0, small);
+      // Filled are the hole pixels that got both colour and depth; the rest stay unfilled.
+      cv::Mat with_depth;
+      cv::bitwise_and(small, depth_fill > 0, with_depth);
+      out.image_filled = with_depth;
+      unfilled.setTo(0, with_depth);
     }
   }
   out.unfilled = unfilled;

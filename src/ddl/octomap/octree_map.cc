@@ -64,17 +64,23 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
     cv::Vec3b bgr;
   };
   std::vector<Coloured> colours;
+  // max_range_m bounds the ray (OctoMap's meaning): a longer ray still clears the space along its
+  // first max_range_m but marks nothing occupied, so it is inserted and not coloured. Until
+  // 2026-11-26 depth z was compared instead: rays off the image centre with z below the range
+  // but longer than it lost their endpoint, and rays beyond it cleared nothing.
+  const double max_range2 = config_.max_range_m * config_.max_range_m;
   for (int v = 0; v < scan.depth_m.rows; v += stride) {
     const float* drow = scan.depth_m.ptr<float>(v);
     const std::uint8_t* xrow = scan.exclude_mask.empty() ? nullptr : scan.exclude_mask.ptr(v);
     for (int u = 0; u < scan.depth_m.cols; u += stride) {
       const float z = drow[u];
-      if (z < config_.min_range_m || z > config_.max_range_m) continue;
+      if (!(z >= config_.min_range_m)) continue;  // also no measurement (0) and NaN
       if (xrow != nullptr && xrow[u] != 0) continue;
-      const Vec3d p_w = R * camera_.unproject(u, v, z) + t;
+      const Vec3d p_c = camera_.unproject(u, v, z);
+      const Vec3d p_w = R * p_c + t;
       cloud.push_back(static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
                       static_cast<float>(p_w.z()));
-      colours.push_back({p_w, scan.bgr.at<cv::Vec3b>(v, u)});
+      if (p_c.squaredNorm() <= max_range2) colours.push_back({p_w, scan.bgr.at<cv::Vec3b>(v, u)});
     }
   }
   const ::octomap::point3d origin(static_cast<float>(t.x()), static_cast<float>(t.y()),
@@ -91,8 +97,23 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
   last_ms_ = watch.elapsed_ms();
 }
 
+namespace {
+
+// OctoMap's write(filename) reports success whatever the stream did (a full disk included), so
+// the files are written through our own stream and checked after it is closed.
+template <typename WriteFn>
+void write_checked(const std::string& path, const char* what, WriteFn&& write) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw Error(fmt::format("{}: cannot open for writing", path));
+  const bool ok = write(file);
+  file.close();
+  if (!ok || !file) throw Error(fmt::format("{}: cannot write the {}", path, what));
+}
+
+}  // namespace
+
 void OctreeMap::write_ot(const std::string& path) const {
-  if (!tree_->write(path)) throw Error(fmt::format("{}: cannot write the colour octree", path));
+  write_checked(path, "colour octree", [&](std::ostream& out) { return tree_->write(out); });
 }
 
 void OctreeMap::write_bt(const std::string& path) const {
@@ -107,9 +128,8 @@ void OctreeMap::write_bt(const std::string& path) const {
     (void)node;
   }
   occupancy.updateInnerOccupancy();
-  if (!occupancy.writeBinary(path)) {
-    throw Error(fmt::format("{}: cannot write the occupancy octree", path));
-  }
+  write_checked(path, "occupancy octree",
+                [&](std::ostream& out) { return occupancy.writeBinary(out); });
 }
 
 void OctreeMap::write_ply(const std::string& path) const {
@@ -127,6 +147,7 @@ void OctreeMap::write_ply(const std::string& path) const {
     file << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << int(c.r) << ' ' << int(c.g) << ' '
          << int(c.b) << '\n';
   }
+  file.close();  // flushes: a small file's write error shows only here
   if (!file) throw Error(fmt::format("{}: write failed", path));
 }
 
@@ -228,16 +249,34 @@ void collect_occupied(const Tree& tree, OccupiedVoxels& out) {
 
 OccupiedVoxels read_occupied_voxels(const std::string& path) {
   if (!std::filesystem::exists(path)) throw InputError::at(path, "no such map file");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError::at(path, "cannot open the map file");
   OccupiedVoxels out;
+  // OctoMap reads a cut-off file without complaint (wrong voxels) or dies in bad_alloc on a
+  // garbage node count: the stream state after reading and the exception tell.
+  const auto truncated = [&] { return InputError::at(path, "truncated or corrupt octree data"); };
   if (std::filesystem::path(path).extension() == ".bt") {
     ::octomap::OcTree tree(0.1);
-    if (!tree.readBinary(path)) throw InputError::at(path, "not a binary OctoMap (.bt) file");
+    bool ok = false;
+    try {
+      ok = tree.readBinary(file);
+    } catch (const std::bad_alloc&) {
+      throw truncated();
+    }
+    if (!ok) throw InputError::at(path, "not a binary OctoMap (.bt) file");
+    if (file.fail()) throw truncated();
     out.resolution_m = tree.getResolution();
     collect_occupied(tree, out);
     return out;
   }
-  std::unique_ptr<::octomap::AbstractOcTree> tree(::octomap::AbstractOcTree::read(path));
+  std::unique_ptr<::octomap::AbstractOcTree> tree;
+  try {
+    tree.reset(::octomap::AbstractOcTree::read(file));
+  } catch (const std::bad_alloc&) {
+    throw truncated();
+  }
   if (tree == nullptr) throw InputError::at(path, "not an OctoMap (.ot) file");
+  if (file.fail()) throw truncated();
   out.resolution_m = tree->getResolution();
   if (const auto* colour = dynamic_cast<const ::octomap::ColorOcTree*>(tree.get())) {
     collect_occupied(*colour, out);

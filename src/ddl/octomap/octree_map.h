@@ -23,7 +23,9 @@ namespace ddl::octomap {
 
 struct OctreeConfig {
   double resolution_m = 0.05;  // voxel edge; 5 cm resolves desks and chairs at room scale
-  double max_range_m = 4.0;    // rays longer than this are truncated (Kinect noise grows ~ z^2)
+  double max_range_m = 4.0;    // rays longer than this (camera centre to point, not depth z) are
+                               // truncated: they clear free space up to it, mark nothing occupied
+                               // (Kinect noise grows ~ z^2)
   double min_range_m = 0.3;    // closer measurements are ignored
   int pixel_stride = 4;        // use every n-th pixel in u and v (speed; voxels are larger anyway)
   double prob_hit = 0.7;       // OctoMap sensor model
