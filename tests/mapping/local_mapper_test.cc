@@ -165,6 +165,45 @@ TEST(LocalMapper, RaisedAbortSkipsFusionBundleAdjustmentAndCulling) {
   EXPECT_NEAR(mean_center_error(run, false), 0.03, 1e-9);
 }
 
+// Threaded mode: local mapping may hold a keyframe (past its reset check) when tracking, lost
+// with a young map, clears it. Map::clear's floor keeps that keyframe, the points it makes and
+// its BoW entry out of the new map (before 2026-11-26 they were put back, and the old-map
+// keyframe, lowest id, became the new map's first keyframe).
+TEST(LocalMapper, AKeyframeOfAMapResetMeanwhileIsNotPutBack) {
+  std::mt19937_64 rng(31);
+  SyntheticWorld world;
+  world.points = SyntheticWorld::room(2000, 2.5, 1.5, rng);
+  world.train_vocabulary(rng);
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  test::FakeTracker tracker(map, world, /*track_window=*/10);
+  LocalMapper mapper(test_config(), world.camera, map, world.vocabulary, database);
+  const SE3 T0 = test::look_along(Vec3d::Zero(), 0.0);
+  const map::KeyFramePtr first = tracker.make_keyframe(world.observe(T0, rng, {}, true), T0, 0);
+  ASSERT_EQ(mapper.process(first, nullptr), first);
+  const SE3 T1 = test::look_along(Vec3d(0.1, 0.0, 0.0), test::rad(2.0));
+  const map::KeyFramePtr stale = tracker.make_keyframe(world.observe(T1, rng, {}, true), T1, 1);
+  ASSERT_GT(map->map_point_count(), 0u);
+
+  const map::KeyFrameId floor = map->clear();  // the tracker's reset, while mapping holds `stale`
+  database->clear(floor);
+  EXPECT_GT(floor, stale->id());
+  EXPECT_EQ(mapper.process(stale, nullptr), nullptr);
+  EXPECT_EQ(map->keyframe_count(), 0u);
+  EXPECT_EQ(map->map_point_count(), 0u);
+  EXPECT_EQ(database->size(), 0u);
+  EXPECT_FALSE(database->add(stale->id(), stale->bow()));
+
+  // The new map takes keyframes reserved after the reset.
+  const SE3 T2 = test::look_along(Vec3d(0.0, 0.05, 0.0), 0.0);
+  const map::KeyFramePtr fresh = tracker.make_keyframe(world.observe(T2, rng, {}, true), T2, 2);
+  EXPECT_GE(fresh->id(), floor);
+  EXPECT_EQ(mapper.process(fresh, nullptr), fresh);
+  EXPECT_EQ(map->keyframe_count(), 1u);
+  EXPECT_TRUE(database->contains(fresh->id()));
+  EXPECT_GT(map->map_point_count(), 0u);
+}
+
 TEST(LocalMapper, SameInputGivesIdenticalMap) {
   const MappingRun a = run_mapping(24, test_config(), true);
   const MappingRun b = run_mapping(24, test_config(), true);

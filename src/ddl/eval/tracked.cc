@@ -1,5 +1,7 @@
 #include "ddl/eval/tracked.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,7 +18,8 @@ std::vector<double> read_frame_stamps(const std::string& path) {
     const double stamp = io::parse_double(row.fields[0], path, row.line);
     // NaN would break the sort below and with it the de-duplication (a wrong frame count).
     if (!std::isfinite(stamp)) {
-      throw InputError::at_line(path, row.line, "timestamp '" + row.fields[0] + "' is not finite");
+      throw InputError::at_line(path, row.line,
+                                fmt::format("timestamp '{}' is not finite", row.fields[0]));
     }
     stamps.push_back(stamp);
   }

@@ -2,14 +2,18 @@
 
 namespace ddl::map {
 
-void Map::add_keyframe(const KeyFramePtr& keyframe) {
+bool Map::add_keyframe(const KeyFramePtr& keyframe) {
   std::lock_guard lock(index_mutex_);
+  if (keyframe->id() < floor_) return false;
   keyframes_[keyframe->id()] = keyframe;
+  return true;
 }
 
-void Map::add_map_point(const MapPointPtr& point) {
+bool Map::add_map_point(const MapPointPtr& point) {
   std::lock_guard lock(index_mutex_);
+  if (point->first_keyframe_id() < floor_) return false;
   points_[point->id()] = point;
+  return true;
 }
 
 void Map::erase_keyframe(KeyFrameId id) {
@@ -75,14 +79,16 @@ void Map::read_consistent(const std::function<void()>& f) const {
   f();
 }
 
-void Map::clear() {
+KeyFrameId Map::clear() {
   std::lock_guard lock(index_mutex_);
+  floor_ = next_keyframe_id_.load();
   // Break KeyFrame -> MapPoint ownership so nothing outlives the map.
   for (auto& [id, kf] : keyframes_) {
     for (std::size_t i = 0; i < kf->features().size(); ++i) kf->erase_map_point(i);
   }
   keyframes_.clear();
   points_.clear();
+  return floor_;
 }
 
 }  // namespace ddl::map

@@ -31,8 +31,12 @@ class Map {
   KeyFrameId next_keyframe_id() { return next_keyframe_id_.fetch_add(1); }
   MapPointId next_map_point_id() { return next_map_point_id_.fetch_add(1); }
 
-  void add_keyframe(const KeyFramePtr& keyframe);
-  void add_map_point(const MapPointPtr& point);
+  /// Adds the keyframe, unless it was made for the map that clear() emptied (its id is below
+  /// the floor clear() returned): then nothing happens and false is returned.
+  bool add_keyframe(const KeyFramePtr& keyframe);
+  /// Adds the point, unless it was made by a keyframe of the map that clear() emptied
+  /// (MapPoint::first_keyframe_id below the floor): then false.
+  bool add_map_point(const MapPointPtr& point);
   /// Removes from the index (call after KeyFrame::set_bad / MapPoint::set_bad).
   void erase_keyframe(KeyFrameId id);
   void erase_map_point(MapPointId id);
@@ -55,8 +59,11 @@ class Map {
   int big_change_index() const { return big_change_index_.load(); }
   void notify_big_change() { big_change_index_.fetch_add(1); }
 
-  /// Drops everything (e.g. a reset after tracking failure at start-up).
-  void clear();
+  /// Drops everything (e.g. a reset after tracking failure at start-up) and returns the floor:
+  /// every keyframe id reserved before the call is below it. Keyframes and points of the old map
+  /// are refused from then on, so a stage that was still working on one when the tracker reset
+  /// the map (local mapping in its own thread) cannot put it back.
+  KeyFrameId clear();
 
  private:
   std::atomic<KeyFrameId> next_keyframe_id_{0};
@@ -65,6 +72,7 @@ class Map {
   mutable std::mutex index_mutex_;
   std::map<KeyFrameId, KeyFramePtr> keyframes_;
   std::map<MapPointId, MapPointPtr> points_;
+  KeyFrameId floor_ = 0;  // see clear()
   mutable std::shared_mutex update_mutex_;
 };
 

@@ -53,7 +53,7 @@ void LocalMapper::apply_pending_reset() {
   first_valid_keyframe_ = std::max(first_valid_keyframe_, *reset);
 }
 
-void LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
+bool LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
   if (!keyframe->has_bow() && !vocabulary_->empty()) {
     vocabulary::BowVector bow;
     vocabulary::FeatureVector feature_vector;
@@ -77,8 +77,11 @@ void LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
     }
   }
   keyframe->update_connections();
-  map_->add_keyframe(keyframe);
+  // Refused when tracking reset the map since this keyframe passed the check in process(): it
+  // belongs to the old map (Map::clear).
+  if (!map_->add_keyframe(keyframe)) return false;
   database_->add(keyframe->id(), keyframe->bow());
+  return true;
 }
 
 int LocalMapper::fuse_with_neighbours(const map::KeyFramePtr& keyframe) {
@@ -137,7 +140,10 @@ map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
   if (!keyframe || keyframe->id() < first_valid_keyframe_) return nullptr;
   LocalMapperTimings timings;
   Stopwatch watch;
-  insert_keyframe(keyframe);
+  if (!insert_keyframe(keyframe)) {
+    spdlog::debug("local mapping: keyframe {} belongs to a map that was reset", keyframe->id());
+    return nullptr;
+  }
   timings.insertion_ms = watch.elapsed_ms();
 
   watch.reset();

@@ -77,7 +77,8 @@ class LocalMapper {
 
  private:
   void apply_pending_reset();
-  void insert_keyframe(const map::KeyFramePtr& keyframe);
+  /// False when the map refused the keyframe (it belongs to a map that was reset meanwhile).
+  bool insert_keyframe(const map::KeyFramePtr& keyframe);
   int fuse_with_neighbours(const map::KeyFramePtr& keyframe);
 
   LocalMapperConfig config_;

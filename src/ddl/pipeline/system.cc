@@ -66,7 +66,9 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
                                      [this] {
                                        {
                                          std::lock_guard lock(pause_mutex_);
-                                         --pause_requests_;
+                                         // Mapping is not running while paused: the request
+                                         // above is spent, and must not abort the next BA.
+                                         if (--pause_requests_ == 0) abort_local_ba_.store(false);
                                        }
                                        pause_cv_.notify_all();
                                      }});
@@ -259,6 +261,11 @@ void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {
 
 void System::mapping_worker() {
   try {
+    // The abort request is cleared before the keyframe is taken, never after: a request made
+    // while this thread takes it (a newer keyframe pushed, loop closing asking for a pause) must
+    // reach the local BA below. Clearing it after the pause wait lost such requests, so a full
+    // local BA ran while a keyframe or a loop correction waited (found by review, 2026-11-26).
+    abort_local_ba_.store(false);
     while (auto keyframe = mapping_queue_->pop()) {
       mapper_busy_.store(true);
       {
@@ -266,7 +273,9 @@ void System::mapping_worker() {
         pause_cv_.wait(lock, [&] { return pause_requests_ == 0; });
         mapping_in_progress_ = true;
       }
-      abort_local_ba_.store(false);
+      // Keyframes queued behind this one: its local BA is not worth finishing (ORB-SLAM2 skips
+      // it then).
+      if (mapping_queue_->size() > 0) abort_local_ba_.store(true);
       Stopwatch watch;
       map::KeyFramePtr kept = mapper_->process(*keyframe, &abort_local_ba_);
       timings_.record("local_mapping", watch.elapsed_ms());
@@ -276,6 +285,7 @@ void System::mapping_worker() {
       }
       pause_cv_.notify_all();
       mapper_busy_.store(false);
+      abort_local_ba_.store(false);  // before the next keyframe is taken (see above)
       if (kept && !loop_queue_->push(kept)) break;
     }
   } catch (...) {

@@ -389,8 +389,8 @@ void Tracker::maybe_create_keyframe(Frame& frame, const MappingStatus& mapping,
 void Tracker::reset(TrackingResult& result) {
   spdlog::warn("tracking lost with {} keyframe(s) in the map: resetting the map",
                map_->keyframe_count());
-  map_->clear();
-  if (database_) database_->clear();
+  const map::KeyFrameId floor = map_->clear();
+  if (database_) database_->clear(floor);
   local_map_.clear();
   motion_model_.reset();
   reference_keyframe_.reset();

@@ -14,9 +14,10 @@ BowVector normalised(const BowVector& bow) {
 
 }  // namespace
 
-void BowDatabase::add(EntryId entry_id, const BowVector& bow) {
+bool BowDatabase::add(EntryId entry_id, const BowVector& bow) {
   BowVector stored = normalised(bow);
   const std::unique_lock lock(mutex_);
+  if (entry_id < floor_) return false;
   if (const auto it = entries_.find(entry_id); it != entries_.end()) {
     for (const BowEntry& e : it->second) {
       std::vector<Posting>& list = postings_[e.word_id];
@@ -26,6 +27,7 @@ void BowDatabase::add(EntryId entry_id, const BowVector& bow) {
   }
   for (const BowEntry& e : stored) postings_[e.word_id].push_back(Posting{entry_id, e.weight});
   entries_[entry_id] = std::move(stored);
+  return true;
 }
 
 bool BowDatabase::erase(EntryId entry_id) {
@@ -42,10 +44,11 @@ bool BowDatabase::erase(EntryId entry_id) {
   return true;
 }
 
-void BowDatabase::clear() {
+void BowDatabase::clear(EntryId floor) {
   const std::unique_lock lock(mutex_);
   postings_.clear();
   entries_.clear();
+  floor_ = floor;
 }
 
 std::size_t BowDatabase::size() const {

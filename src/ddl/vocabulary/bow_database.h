@@ -35,10 +35,13 @@ class BowDatabase {
   BowDatabase& operator=(const BowDatabase&) = delete;
 
   /// Adds (or replaces) an entry. The vector is stored L1-normalised.
-  void add(EntryId entry_id, const BowVector& bow);
+  /// Adds (or replaces) an entry; an id below the floor of the last clear() is refused (false).
+  bool add(EntryId entry_id, const BowVector& bow);
   /// Removes an entry; returns false when it was not present.
   bool erase(EntryId entry_id);
-  void clear();
+  /// Removes every entry; from then on ids below `floor` are refused by add() (the keyframes of
+  /// a map that was reset, still in the hands of another stage).
+  void clear(EntryId floor = 0);
   std::size_t size() const;
   bool contains(EntryId entry_id) const;
 
@@ -60,6 +63,7 @@ class BowDatabase {
   mutable std::shared_mutex mutex_;
   std::unordered_map<WordId, std::vector<Posting>> postings_;
   std::unordered_map<EntryId, BowVector> entries_;  // normalised vectors, for erase()
+  EntryId floor_ = 0;                               // see clear()
 };
 
 }  // namespace ddl::vocabulary
