@@ -58,17 +58,15 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
         std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
     loop_queue_ = std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
     loop_closer_->set_mapping_pause({[this] {
-                                       abort_local_ba_.store(true);  // end a running local BA
                                        std::unique_lock lock(pause_mutex_);
                                        ++pause_requests_;
+                                       abort_local_ba_.store(true);  // end a running local BA
                                        pause_cv_.wait(lock, [&] { return !mapping_in_progress_; });
                                      },
                                      [this] {
                                        {
                                          std::lock_guard lock(pause_mutex_);
-                                         // Mapping is not running while paused: the request
-                                         // above is spent, and must not abort the next BA.
-                                         if (--pause_requests_ == 0) abort_local_ba_.store(false);
+                                         --pause_requests_;
                                        }
                                        pause_cv_.notify_all();
                                      }});
@@ -241,8 +239,13 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     if (config_.mode == RunMode::kDeterministic) {
       handle_keyframe_inline(result.new_keyframe);
     } else {
-      abort_local_ba_.store(true);
       if (!mapping_queue_->push(result.new_keyframe)) rethrow_worker_error();
+      std::lock_guard lock(pause_mutex_);
+      ++keyframes_pushed_;
+      // Mapping still works on an older keyframe: end its local BA early (ORB-SLAM2's
+      // InterruptBA). Counted under the mutex, so the keyframe just pushed never aborts its own
+      // processing (mapping_worker).
+      if (keyframes_taken_ < keyframes_pushed_) abort_local_ba_.store(true);
     }
   }
   timings_.record("frame_total", frame_watch.elapsed_ms());
@@ -261,21 +264,19 @@ void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {
 
 void System::mapping_worker() {
   try {
-    // The abort request is cleared before the keyframe is taken, never after: a request made
-    // while this thread takes it (a newer keyframe pushed, loop closing asking for a pause) must
-    // reach the local BA below. Clearing it after the pause wait lost such requests, so a full
-    // local BA ran while a keyframe or a loop correction waited (found by review, 2026-11-26).
-    abort_local_ba_.store(false);
     while (auto keyframe = mapping_queue_->pop()) {
       mapper_busy_.store(true);
       {
         std::unique_lock lock(pause_mutex_);
         pause_cv_.wait(lock, [&] { return pause_requests_ == 0; });
         mapping_in_progress_ = true;
+        // The abort request for this keyframe, decided under the same mutex as the requests
+        // (a newer keyframe pushed, loop closing pausing mapping): raised when newer keyframes
+        // already wait. Until 2026-11-26 it was cleared here without the mutex, which could wipe
+        // a request made meanwhile (found by review).
+        ++keyframes_taken_;
+        abort_local_ba_.store(keyframes_taken_ < keyframes_pushed_);
       }
-      // Keyframes queued behind this one: its local BA is not worth finishing (ORB-SLAM2 skips
-      // it then).
-      if (mapping_queue_->size() > 0) abort_local_ba_.store(true);
       Stopwatch watch;
       map::KeyFramePtr kept = mapper_->process(*keyframe, &abort_local_ba_);
       timings_.record("local_mapping", watch.elapsed_ms());
@@ -285,7 +286,6 @@ void System::mapping_worker() {
       }
       pause_cv_.notify_all();
       mapper_busy_.store(false);
-      abort_local_ba_.store(false);  // before the next keyframe is taken (see above)
       if (kept && !loop_queue_->push(kept)) break;
     }
   } catch (...) {

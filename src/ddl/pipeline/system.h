@@ -146,6 +146,8 @@ class System {
   std::condition_variable pause_cv_;
   int pause_requests_ = 0;
   bool mapping_in_progress_ = false;
+  std::uint64_t keyframes_pushed_ = 0;  // to mapping_queue_, under pause_mutex_
+  std::uint64_t keyframes_taken_ = 0;   // by mapping_worker, under pause_mutex_
   std::thread mapping_thread_;
   std::thread loop_thread_;
   std::mutex error_mutex_;
