@@ -83,6 +83,18 @@ TEST(SystemConfig, InvalidValueNamesTheKey) {
   EXPECT_NE(type_msg.find("keyframe_queue_capacity"), std::string::npos) << type_msg;
 }
 
+// The virtual baseline of the RGB-D residuals is one number in three sections: a file that sets
+// only one of them is rejected (mapping and loop closing predicted the stored u_r with another bf,
+// off by delta_bf / z pixels, found by review on 2026-11-26).
+TEST(SystemConfig, TheThreeBfKeysMustAgree) {
+  const std::string msg =
+      message_of([] { parse_system_config("tracking:\n  frame:\n    bf: 50\n", "bf.yaml"); });
+  EXPECT_NE(msg.find("'mapping.bf'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tracking.frame.bf"), std::string::npos) << msg;
+  EXPECT_NO_THROW(parse_system_config(
+      "tracking:\n  frame:\n    bf: 50\nmapping:\n  bf: 50\nloop:\n  bf: 50\n", "bf.yaml"));
+}
+
 TEST(SystemConfig, ReferenceListsEveryNestedKey) {
   const std::string md = system_config_reference_markdown();
   for (const char* key :

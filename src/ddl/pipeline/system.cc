@@ -23,6 +23,17 @@ void SystemConfig::validate() const {
   loop.validate();
   dynamic.validate();
   dense.validate();
+  // One camera, one virtual baseline: the frames store u_r = u - bf / z with tracking's value,
+  // and mapping and loop closing predict u_r with theirs. A difference puts every RGB-D residual
+  // off by delta_bf / z (5 px at 2 m for 10) and silently turns close points into outliers.
+  for (const auto& [key, value] :
+       {std::pair<const char*, double>{"mapping.bf", mapping.bf}, {"loop.bf", loop.bf}}) {
+    if (value != tracking.frame.bf) {
+      throw ConfigError::for_key(
+          key, fmt::format("is {} but tracking.frame.bf is {}: the three bf keys must be equal",
+                           value, tracking.frame.bf));
+    }
+  }
 }
 
 System::System(const SystemConfig& config, const camera::PinholeCamera& camera,

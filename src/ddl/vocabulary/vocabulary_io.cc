@@ -193,10 +193,13 @@ Vocabulary Vocabulary::load(const std::string& path) {
       node_count <= max_nodes ? kHeaderBytes + node_count * kNodeBytes + kChecksumBytes : 0;
   if (node_count > max_nodes || size != expected) {
     throw InputError::at(
-        path,
-        fmt::format("size {} bytes does not match the header's {} nodes "
-                    "({} bytes expected): truncated or corrupted",
-                    size, node_count, kHeaderBytes + node_count * kNodeBytes + kChecksumBytes));
+        path, node_count <= max_nodes
+                  ? fmt::format("size {} bytes does not match the header's {} nodes "
+                                "({} bytes expected): truncated or corrupted",
+                                size, node_count, expected)
+                  : fmt::format("size {} bytes cannot hold the header's {} nodes (at most {}): "
+                                "truncated or corrupted",
+                                size, node_count, max_nodes));
   }
   const std::size_t payload = size - kChecksumBytes;
   if (checksum(p, payload) != read_at<std::uint64_t>(p + payload)) {
