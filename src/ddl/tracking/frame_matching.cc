@@ -6,7 +6,10 @@
 namespace ddl::tracking {
 namespace {
 
-constexpr int kNoMatch = 256;
+// Above every Hamming distance of 256-bit descriptors and every allowed threshold (the search
+// distances may be configured up to 256): a search that met no free candidate must never pass
+// `best_distance <= max_distance` (with 256 it did, and wrote the point onto keypoint 0).
+constexpr int kNoMatch = 257;
 
 const std::uint8_t* descriptor_row(const cv::Mat& descriptors, std::size_t i) {
   return descriptors.ptr<std::uint8_t>(static_cast<int>(i));
