@@ -342,5 +342,38 @@ TEST(OrbExtractor, ConfigValidationNamesTheKey) {
       << "the radius-15 default pattern does not fit a 21-pixel patch";
 }
 
+// The FAST cell threshold counts masked corners (a margin around dynamic objects, see the
+// extractor): a cell with a strong corner under the mask still refuses the weak corners beside it.
+TEST(OrbExtractor, AMaskedStrongCornerStillSetsItsCellsThreshold) {
+  OrbExtractorConfig config;
+  config.num_levels = 1;
+  // Two blurred dots in the first FAST cell (x, y in [19, 49)) of a flat image: a bright one
+  // (FAST response about 150: strong) and a faint one (about 17: only above the fallback
+  // threshold 7). Blurred, so non-maximum suppression keeps one response per dot.
+  cv::Mat image(480, 640, CV_32FC1, cv::Scalar(100));
+  image.at<float>(26, 26) += 150.0f * 9.0f;
+  image.at<float>(42, 42) += 13.0f * 9.0f;
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
+  image.convertTo(image, CV_8UC1);
+  cv::Mat mask = cv::Mat::zeros(image.size(), CV_8UC1);
+  cv::circle(mask, {26, 26}, 6, cv::Scalar(255), cv::FILLED);  // covers the bright dot only
+  OrbExtractor extractor{config};
+  auto count_near = [](const OrbFeatures& f, cv::Point2f p) {
+    int n = 0;
+    for (const cv::KeyPoint& kp : f.keypoints) n += cv::norm(kp.pt - p) < 3.0 ? 1 : 0;
+    return n;
+  };
+  const OrbFeatures all = extractor.extract(image);
+  ASSERT_EQ(count_near(all, {26, 26}), 1) << "precondition: the bright dot is found";
+  ASSERT_EQ(count_near(all, {42, 42}), 0) << "precondition: its cell then refuses the faint dot";
+  // Without the bright dot the faint one is found (the fallback threshold reaches it).
+  cv::Mat faint_only = image.clone();
+  faint_only(cv::Rect(16, 16, 20, 20)).setTo(100);
+  ASSERT_EQ(count_near(extractor.extract(faint_only), {42, 42}), 1);
+  const OrbFeatures masked = extractor.extract(image, mask);
+  EXPECT_EQ(count_near(masked, {26, 26}), 0);
+  EXPECT_EQ(count_near(masked, {42, 42}), 0) << "the masked bright dot still sets the threshold";
+}
+
 }  // namespace
 }  // namespace ddl::features
