@@ -12,6 +12,7 @@
 #include "ddl/core/error.h"
 #include "ddl/io/text_table.h"
 #include "ddl/synthetic/sequence.h"
+#include "half_resolution.h"
 
 namespace ddl::eval {
 namespace {
@@ -25,12 +26,7 @@ class DenseEvalTest : public ::testing::Test {
     fs::remove_all(root_);
     synthetic::SequenceConfig config = synthetic::find_preset("syn_walking_static").config;
     config.frames = 6;
-    config.camera.width = 320;
-    config.camera.height = 240;
-    config.camera.fx /= 2;
-    config.camera.fy /= 2;
-    config.camera.cx = (config.camera.cx + 0.5) / 2 - 0.5;
-    config.camera.cy = (config.camera.cy + 0.5) / 2 - 0.5;
+    config.camera = test_support::half_resolution(config.camera);
     const auto source = synthetic::make_sequence_source(config);
     camera_ = source->camera();
     synthetic::write_sequence(*source, (root_ / "seq").string());

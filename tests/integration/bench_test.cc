@@ -18,6 +18,7 @@
 
 #include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/synthetic/sequence.h"
+#include "half_resolution.h"
 
 namespace ddl {
 namespace {
@@ -33,12 +34,7 @@ std::string shared_dir() {
 synthetic::SequenceConfig small_config(const std::string& preset, int frames) {
   synthetic::SequenceConfig c = synthetic::find_preset(preset).config;
   c.frames = frames;
-  c.camera.width = 320;
-  c.camera.height = 240;
-  c.camera.fx /= 2;
-  c.camera.fy /= 2;
-  c.camera.cx = (c.camera.cx + 0.5) / 2 - 0.5;
-  c.camera.cy = (c.camera.cy + 0.5) / 2 - 0.5;
+  c.camera = test_support::half_resolution(c.camera);
   c.people_dir = shared_dir() + "/data/people/ccp";
   return c;
 }

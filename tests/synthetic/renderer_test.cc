@@ -11,20 +11,12 @@
 #include "ddl/synthetic/motion.h"
 #include "ddl/synthetic/scene.h"
 #include "ddl/synthetic/sequence.h"
+#include "half_resolution.h"
 
 namespace ddl::synthetic {
 namespace {
 
-camera::PinholeCamera small_camera() {
-  camera::PinholeCamera c = tum3_camera();
-  c.width = 320;
-  c.height = 240;
-  c.fx /= 2;
-  c.fy /= 2;
-  c.cx = (c.cx + 0.5) / 2 - 0.5;
-  c.cy = (c.cy + 0.5) / 2 - 0.5;
-  return c;
-}
+camera::PinholeCamera small_camera() { return test_support::half_resolution(tum3_camera()); }
 
 /// A 4 m x 3 m wall with a single white square marker of side `marker_m` centred at the wall's
 /// centre, on black.

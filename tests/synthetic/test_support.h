@@ -8,6 +8,7 @@
 #include <string>
 
 #include "ddl/synthetic/sequence.h"
+#include "half_resolution.h"
 
 namespace ddl::synthetic::testing {
 
@@ -20,12 +21,7 @@ inline std::string shared_dir() {
 inline SequenceConfig small_config(const std::string& preset, int frames) {
   SequenceConfig c = find_preset(preset).config;
   c.frames = frames;
-  c.camera.width = 320;
-  c.camera.height = 240;
-  c.camera.fx /= 2;
-  c.camera.fy /= 2;
-  c.camera.cx = (c.camera.cx + 0.5) / 2 - 0.5;
-  c.camera.cy = (c.camera.cy + 0.5) / 2 - 0.5;
+  c.camera = test_support::half_resolution(c.camera);
   c.people_dir = shared_dir() + "/data/people/ccp";
   return c;
 }

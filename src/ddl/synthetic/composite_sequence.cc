@@ -36,9 +36,10 @@ bool interpolate_pose(const io::Trajectory& gt, double stamp, SE3& out) {
   return true;
 }
 
-/// The void mask of a composite frame: real pixels whose measured point (`depth_m`, along the
-/// renderer's ray of the pixel, camera -> world by `T_w_c`) lies in one of `boxes`, grown by
-/// `grow_px`, minus the dynamic mask (a person drawn in front is scored).
+/// The void mask of a composite frame: real pixels whose surface point (`depth_m`, the measured
+/// depth with holes taken from the nearest measured pixel, along the renderer's ray of the pixel,
+/// camera -> world by `T_w_c`) lies in one of `boxes`, grown by `grow_px`, minus the dynamic mask
+/// (a person drawn in front is scored).
 cv::Mat void_mask_of(const cv::Mat& depth_m, const Renderer& renderer, const SE3& T_w_c,
                      const std::vector<WorldBox>& boxes, int grow_px, const cv::Mat& dynamic_mask) {
   cv::Mat mask(depth_m.size(), CV_8UC1, cv::Scalar(0));
