@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "ddl/core/error.h"
+#include "ddl/map/map.h"
+#include "ddl/tracking/local_map.h"
 #include "tracking_test_support.h"
 
 namespace ddl::tracking {
@@ -164,6 +166,41 @@ TEST(FrameTest, UnprojectsKeypointsIntoTheWorld) {
     EXPECT_NEAR(p_c.z(), frame.features().depth_m[i], 1e-5);
   }
   EXPECT_TRUE((frame.camera_center_w() - seq.T_w_c[5].translation()).norm() < 1e-12);
+}
+
+// The local keyframe set of a frame whose points more keyframes observe than the set's bound.
+TEST(LocalMapTest, KeyframesObservingTheFramesPointsAllStayBeyondTheBound) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  const auto& seq = room_sequence();
+  Frame frame = builder.build(seq.frames[0], cv::Mat(), 0);
+  frame.set_T_c_w(seq.T_w_c[0].inverse());
+  ASSERT_GT(frame.size(), 300u);
+  // 120 keyframes (ids 0..119), keyframe k observing the points of keypoints 2k and 2k + 1;
+  // the newest, 119, also observes 60 more points: it is the reference.
+  std::vector<map::KeyFramePtr> keyframes;
+  auto features = std::make_shared<map::FrameFeatures>(frame.features());
+  for (int k = 0; k < 120; ++k) {
+    keyframes.push_back(std::make_shared<map::KeyFrame>(k, 0.1 * k, features, frame.T_c_w()));
+  }
+  auto observe = [&](std::size_t i, const map::KeyFramePtr& kf) {
+    auto point = std::make_shared<map::MapPoint>(i, frame.unproject_w(i), kf);
+    point->add_observation(kf, i, true);
+    frame.set_map_point(i, point);
+  };
+  for (int k = 0; k < 120; ++k) {
+    observe(2 * k, keyframes[k]);
+    observe(2 * k + 1, keyframes[k]);
+  }
+  for (std::size_t i = 240; i < 300; ++i) observe(i, keyframes.back());
+  MatchingConfig matching = config.matching;
+  matching.max_local_keyframes = 80;
+  LocalMap local(matching);
+  const map::KeyFramePtr reference = local.update(frame);
+  ASSERT_EQ(reference, keyframes.back());
+  EXPECT_EQ(local.keyframes().size(), 120u);  // K1 is never cut (ORB-SLAM2)
+  EXPECT_NE(std::find(local.keyframes().begin(), local.keyframes().end(), reference),
+            local.keyframes().end());
 }
 
 }  // namespace

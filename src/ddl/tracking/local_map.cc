@@ -64,7 +64,9 @@ void LocalMap::collect_keyframes(const Frame& frame, map::KeyFramePtr& reference
     }
     try_add(kf->parent());
   }
-  if (keyframes_.size() > max_keyframes) keyframes_.resize(max_keyframes);
+  // No truncation: the K1 keyframes all stay, as in ORB-SLAM2 (the bound only stops the K2
+  // expansion). Cutting the id-ordered list to the bound dropped the newest keyframes, the
+  // reference's points among them (found by review, 2026-11-26).
 }
 
 void LocalMap::collect_points() {

@@ -29,9 +29,10 @@ struct MatchingConfig {
   int min_map_matches = 10;  // inliers with map observations needed after motion/ref tracking
   float local_search_radius = 3.0f;  // window factor of local-map projection search (RGB-D: 3)
   float local_search_radius_after_relocalization = 5.0f;  // the same, 2 frames after a reloc
-  float local_search_ratio = 0.8f;         // Lowe ratio (same level) in local-map projection search
-  float frustum_min_view_cos = 0.5f;       // points seen at more than 60 deg off their mean view
-  int max_local_keyframes = 80;            // bound of the local keyframe set (ORB-SLAM2: 80)
+  float local_search_ratio = 0.8f;    // Lowe ratio (same level) in local-map projection search
+  float frustum_min_view_cos = 0.5f;  // points seen at more than 60 deg off their mean view
+  int max_local_keyframes = 80;  // neighbours (K2) join the local keyframes while fewer than this;
+                                 // those observing the frame's points (K1) all stay (ORB-SLAM2: 80)
   int local_covisibles_per_keyframe = 10;  // best covisibles scanned per local keyframe
   int local_map_min_inliers = 30;          // inliers needed after local-map tracking
   int local_map_min_inliers_after_relocalization = 50;  // ... within max_frames of a reloc
