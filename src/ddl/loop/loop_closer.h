@@ -57,9 +57,11 @@ struct LoopResult {
 };
 
 /// Hooks that keep local mapping still while loop closing moves the map (ORB-SLAM2's
-/// RequestStop / Release). pause() must return once local mapping has finished the keyframe it
-/// is processing and will not start another until resume(); both may be called from the loop
-/// thread and from the global BA thread. Empty hooks (deterministic mode) do nothing.
+/// RequestStop / Release). pause() must return once every keyframe handed to local mapping so
+/// far is processed (in the map, with its covisibility links, so the correction reaches it), and
+/// local mapping must start no other until resume() (pipeline::LocalMappingGate); both may be
+/// called from the loop thread and from the global BA thread. Empty hooks (deterministic mode)
+/// do nothing.
 struct MappingPause {
   std::function<void()> pause;
   std::function<void()> resume;

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 
 #include "ddl/core/error.h"
@@ -67,20 +68,13 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   if (config_.mode == RunMode::kThreaded) {
     mapping_queue_ =
         std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
-    loop_queue_ = std::make_unique<BoundedQueue<map::KeyFramePtr>>(config_.keyframe_queue_capacity);
-    loop_closer_->set_mapping_pause({[this] {
-                                       std::unique_lock lock(pause_mutex_);
-                                       ++pause_requests_;
-                                       abort_local_ba_.store(true);  // end a running local BA
-                                       pause_cv_.wait(lock, [&] { return !mapping_in_progress_; });
-                                     },
-                                     [this] {
-                                       {
-                                         std::lock_guard lock(pause_mutex_);
-                                         --pause_requests_;
-                                       }
-                                       pause_cv_.notify_all();
-                                     }});
+    // Unbounded: the mapping worker must never block on it. A loop correction waits for the
+    // mapping queue to drain (LocalMappingGate) while the loop thread takes nothing from here;
+    // the mapping queue's bound limits what flows in.
+    loop_queue_ =
+        std::make_unique<BoundedQueue<map::KeyFramePtr>>(std::numeric_limits<std::size_t>::max());
+    loop_closer_->set_mapping_pause(
+        {[this] { mapping_gate_.pause(); }, [this] { mapping_gate_.resume(); }});
     mapping_thread_ = std::thread([this] { mapping_worker(); });
     loop_thread_ = std::thread([this] { loop_worker(); });
   }
@@ -185,7 +179,12 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   }
 
   tracking::MappingStatus status;
-  if (config_.mode == RunMode::kThreaded) {
+  const bool threaded = config_.mode == RunMode::kThreaded;
+  // Closed once the keyframe, if any, is queued: loop closing does not stop mapping in between,
+  // and while it asks to stop, tracking creates no keyframe.
+  InsertionWindow insertion(threaded ? &mapping_gate_ : nullptr);
+  if (threaded) {
+    status.stopped = !insertion.allowed();
     status.queued_keyframes = mapping_queue_->size();
     status.accepts_keyframes = status.queued_keyframes == 0 && !mapper_busy_.load();
   } else {
@@ -245,20 +244,16 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (result.new_keyframe) {
     ++stats_.keyframes_created;
     frames_since_keyframe_ = 0;
+    if (threaded) {
+      const bool queued = mapping_queue_->push(result.new_keyframe);
+      insertion.close(queued);
+      if (!queued) rethrow_worker_error();
+    }
     dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m, outcome.masks.combined);
     dense_->submit({result.new_keyframe, frame.rgb, frame.depth_m, outcome.masks.combined});
-    if (config_.mode == RunMode::kDeterministic) {
-      handle_keyframe_inline(result.new_keyframe);
-    } else {
-      if (!mapping_queue_->push(result.new_keyframe)) rethrow_worker_error();
-      std::lock_guard lock(pause_mutex_);
-      ++keyframes_pushed_;
-      // Mapping still works on an older keyframe: end its local BA early (ORB-SLAM2's
-      // InterruptBA). Counted under the mutex, so the keyframe just pushed never aborts its own
-      // processing (mapping_worker).
-      if (keyframes_taken_ < keyframes_pushed_) abort_local_ba_.store(true);
-    }
+    if (!threaded) handle_keyframe_inline(result.new_keyframe);
   }
+  insertion.close(false);
   timings_.record("frame_total", frame_watch.elapsed_ms());
   return outcome;
 }
@@ -277,37 +272,19 @@ void System::mapping_worker() {
   try {
     while (auto keyframe = mapping_queue_->pop()) {
       mapper_busy_.store(true);
-      {
-        std::unique_lock lock(pause_mutex_);
-        pause_cv_.wait(lock, [&] { return pause_requests_ == 0; });
-        mapping_in_progress_ = true;
-        // The abort request for this keyframe, decided under the same mutex as the requests
-        // (a newer keyframe pushed, loop closing pausing mapping): raised when newer keyframes
-        // already wait. Until 2026-11-26 it was cleared here without the mutex, which could wipe
-        // a request made meanwhile (found by review).
-        ++keyframes_taken_;
-        abort_local_ba_.store(keyframes_taken_ < keyframes_pushed_);
-      }
+      mapping_gate_.begin_keyframe();
       Stopwatch watch;
-      map::KeyFramePtr kept = mapper_->process(*keyframe, &abort_local_ba_);
+      map::KeyFramePtr kept = mapper_->process(*keyframe, mapping_gate_.abort_flag());
       timings_.record("local_mapping", watch.elapsed_ms());
-      {
-        std::lock_guard lock(pause_mutex_);
-        mapping_in_progress_ = false;
-      }
-      pause_cv_.notify_all();
+      mapping_gate_.end_keyframe();
       mapper_busy_.store(false);
       if (kept && !loop_queue_->push(kept)) break;
     }
   } catch (...) {
-    {
-      std::lock_guard lock(pause_mutex_);
-      mapping_in_progress_ = false;
-    }
-    pause_cv_.notify_all();
     mapper_busy_.store(false);
     store_error(std::current_exception());
   }
+  mapping_gate_.worker_exited();
   loop_queue_->close();
 }
 

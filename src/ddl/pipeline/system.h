@@ -8,9 +8,11 @@
 //     and then by loop closing (global BA inline). Same input and settings give the same
 //     trajectory. Used by tests and evaluation.
 //   kThreaded: tracking runs in the caller's thread; local mapping and loop closing each run in a
-//     worker thread fed through a bounded queue; global BA runs in the loop closer's background
-//     thread. A new keyframe raises the abort flag of a running local BA (ORB-SLAM2's
-//     InterruptBA). Shutdown: finish() closes the queues, drains them and joins every thread.
+//     worker thread fed through a queue (bounded to local mapping, unbounded from it, so mapping
+//     never blocks while loop closing waits for it); global BA runs in the loop closer's
+//     background thread. A new keyframe raises the abort flag of a running local BA (ORB-SLAM2's
+//     InterruptBA). Loop closing stops mapping through LocalMappingGate. Shutdown: finish()
+//     closes the queues, drains them and joins every thread.
 // A worker that throws stores the exception; the next process()/finish() call rethrows it after
 // shutting the other stages down, and the trajectory so far stays available.
 //
@@ -25,7 +27,6 @@
 // may run on one other thread (a SegmentationStage) meanwhile.
 
 #include <atomic>
-#include <condition_variable>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -42,6 +43,7 @@
 #include "ddl/mapping/local_mapper.h"
 #include "ddl/pipeline/dense_mapper.h"
 #include "ddl/pipeline/dynamic_front_end.h"
+#include "ddl/pipeline/local_mapping_gate.h"
 #include "ddl/pipeline/system_config.h"
 #include "ddl/tracking/tracker.h"
 #include "ddl/vocabulary/bow_database.h"
@@ -139,15 +141,9 @@ class System {
   // Threaded mode only.
   std::unique_ptr<BoundedQueue<map::KeyFramePtr>> mapping_queue_;
   std::unique_ptr<BoundedQueue<map::KeyFramePtr>> loop_queue_;
-  std::atomic<bool> abort_local_ba_{false};
   std::atomic<bool> mapper_busy_{false};
-  // Loop closing holds local mapping still while it moves the map (LoopCloser::MappingPause).
-  std::mutex pause_mutex_;
-  std::condition_variable pause_cv_;
-  int pause_requests_ = 0;
-  bool mapping_in_progress_ = false;
-  std::uint64_t keyframes_pushed_ = 0;  // to mapping_queue_, under pause_mutex_
-  std::uint64_t keyframes_taken_ = 0;   // by mapping_worker, under pause_mutex_
+  // Stop handshake of tracking, local mapping and loop closing (LoopCloser::MappingPause).
+  LocalMappingGate mapping_gate_;
   std::thread mapping_thread_;
   std::thread loop_thread_;
   std::mutex error_mutex_;

@@ -46,7 +46,7 @@ struct DynamicConfig {
 
 struct SystemConfig {
   RunMode mode = RunMode::kDeterministic;   // see System
-  std::size_t keyframe_queue_capacity = 4;  // bounded queues between stages (threaded mode)
+  std::size_t keyframe_queue_capacity = 4;  // tracking -> local mapping queue (threaded mode)
   /// Deterministic mode: local mapping runs inline, so it is never busy and tracking would insert
   /// a keyframe on almost every frame. To keep ORB-SLAM2's keyframe rate reproducibly, mapping
   /// reports itself busy for this many frames after each keyframe (about its processing time at
