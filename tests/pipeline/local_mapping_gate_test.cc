@@ -147,5 +147,22 @@ TEST(LocalMappingGate, PausesNest) {
   gate.close_insertion(false);
 }
 
+// The geometry check's guard: readings taken around a stop, or during one, do not match.
+TEST(LocalMappingGate, TheStopSequenceTellsWhetherLoopClosingHeldMappingInBetween) {
+  LocalMappingGate gate;
+  const std::uint64_t idle = gate.stop_sequence();
+  EXPECT_TRUE(LocalMappingGate::unchanged(idle, gate.stop_sequence()));
+  gate.pause();
+  const std::uint64_t held = gate.stop_sequence();
+  EXPECT_FALSE(LocalMappingGate::unchanged(held, held));  // keyframes may be moving now
+  gate.pause();                                           // nested: still the same stop
+  gate.resume();
+  EXPECT_EQ(gate.stop_sequence(), held);
+  gate.resume();
+  EXPECT_FALSE(LocalMappingGate::unchanged(idle, gate.stop_sequence()));  // a stop came and went
+  const std::uint64_t after = gate.stop_sequence();
+  EXPECT_TRUE(LocalMappingGate::unchanged(after, gate.stop_sequence()));
+}
+
 }  // namespace
 }  // namespace ddl::pipeline

@@ -80,12 +80,10 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
   return out;
 }
 
-cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
-                                       const std::vector<map::KeyFramePtr>& references,
-                                       dynamics::GeometryCheckStats* stats,
-                                       const std::optional<SE3>& T_c_w_previous) {
-  if (!config_.enabled || !config_.use_geometry || references.empty()) return {};
+std::vector<dynamics::ReferenceView> DynamicFrontEnd::reference_views(
+    const std::vector<map::KeyFramePtr>& references) const {
   std::vector<dynamics::ReferenceView> views;
+  if (!config_.enabled || !config_.use_geometry) return views;
   for (const map::KeyFramePtr& kf : references) {
     if (static_cast<int>(views.size()) >= config_.geometry.max_reference_keyframes) break;
     dynamics::ReferenceView view;
@@ -106,8 +104,16 @@ cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_
     }
     views.push_back(std::move(view));
   }
-  return dynamics::geometry_dynamic_mask(frame.depth_m, T_c_w, views, camera_, config_.geometry,
-                                         stats, T_c_w_previous);
+  return views;
+}
+
+cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                                       const std::vector<dynamics::ReferenceView>& references,
+                                       dynamics::GeometryCheckStats* stats,
+                                       const std::optional<SE3>& T_c_w_previous) const {
+  if (!config_.enabled || !config_.use_geometry || references.empty()) return {};
+  return dynamics::geometry_dynamic_mask(frame.depth_m, T_c_w, references, camera_,
+                                         config_.geometry, stats, T_c_w_previous);
 }
 
 cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {

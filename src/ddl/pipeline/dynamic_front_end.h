@@ -60,12 +60,19 @@ class DynamicFrontEnd {
   /// dynamic.segmentation_interval > 1 most frames reuse the last inferred mask, grown.
   CnnMask cnn_mask(const io::RgbdFrame& frame);
 
-  /// Geometry mask at pose T_c_w against `references` (best overlap first); the previous
+  /// What the geometry check needs of the reference keyframes (best overlap first, at most
+  /// dynamic.geometry.max_reference_keyframes): pose, keypoints with depth, cached depth image
+  /// and mask. Their poses are read here: call it where they are consistent with each other and
+  /// with the frame's pose (System reads them under Map::read_consistent).
+  std::vector<dynamics::ReferenceView> reference_views(
+      const std::vector<map::KeyFramePtr>& references) const;
+
+  /// Geometry mask at pose T_c_w against `references` (from reference_views()); the previous
   /// frame's pose, when known, sizes the seed windows to the camera motion.
   cv::Mat geometry_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
-                        const std::vector<map::KeyFramePtr>& references,
+                        const std::vector<dynamics::ReferenceView>& references,
                         dynamics::GeometryCheckStats* stats,
-                        const std::optional<SE3>& T_c_w_previous = std::nullopt);
+                        const std::optional<SE3>& T_c_w_previous = std::nullopt) const;
 
   /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
   cv::Mat exclusion_mask(const cv::Mat& mask) const;
@@ -101,7 +108,7 @@ class DynamicFrontEnd {
   std::unique_ptr<segmentation::Segmenter> segmenter_;
   cv::Mat last_cnn_mask_;  // cnn_mask()'s thread only
   std::optional<std::size_t> last_cnn_index_;
-  std::mutex cache_mutex_;
+  mutable std::mutex cache_mutex_;
   struct KeyframeImages {
     cv::Mat depth_m;
     cv::Mat dynamic_mask;

@@ -60,13 +60,13 @@ void LocalMappingGate::pause() {
   ++stop_requests_;
   abort_local_ba_.store(true);  // end a running local BA
   changed_.wait(lock, [&] { return drained(); });
-  ++stops_granted_;
+  if (stops_granted_++ == 0) stop_sequence_.fetch_add(1);  // odd: held
 }
 
 void LocalMappingGate::resume() {
   {
     std::lock_guard lock(mutex_);
-    --stops_granted_;
+    if (--stops_granted_ == 0) stop_sequence_.fetch_add(1);  // even: released
     --stop_requests_;
   }
   changed_.notify_all();

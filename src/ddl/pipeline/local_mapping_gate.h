@@ -49,6 +49,15 @@ class LocalMappingGate {
   void pause();
   void resume();
 
+  /// Odd while loop closing holds mapping (and may be moving keyframes), incremented when a stop
+  /// begins and when it ends. A reader that combines poses read at different times (the
+  /// geometry check: the frame's pose, then the reference keyframes') saw no loop correction or
+  /// global-BA merge in between when its two readings are equal and even (unchanged()).
+  std::uint64_t stop_sequence() const { return stop_sequence_.load(); }
+  static bool unchanged(std::uint64_t before, std::uint64_t after) {
+    return before == after && before % 2 == 0;
+  }
+
  private:
   bool drained() const;  // under mutex_
 
@@ -62,6 +71,7 @@ class LocalMappingGate {
   std::uint64_t pushed_ = 0;  // keyframes queued by tracking
   std::uint64_t taken_ = 0;   // keyframes taken by the worker
   std::atomic<bool> abort_local_ba_{false};
+  std::atomic<std::uint64_t> stop_sequence_{0};  // changed under mutex_
 };
 
 /// Tracking's insertion window as a scope: opened by the constructor (when `gate` is not null),

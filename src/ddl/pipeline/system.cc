@@ -106,6 +106,9 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
       last_reference_->is_bad()) {
     return {};
   }
+  // Loop closing may move the keyframes between the low-cost pose and the reading of the
+  // references' poses (threaded mode); the check then compares in two different world frames.
+  const std::uint64_t stops_before = mapping_gate_.stop_sequence();
   const Stopwatch watch;
   std::optional<SE3> T_c_w = tracker_->low_cost_pose(current);
   timings_.record("low_cost_tracking", watch.elapsed_ms());
@@ -120,10 +123,18 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
     // that share most points with it (the best overlap; DDL-SLAM Algorithm 1).
     const Stopwatch geometry_watch;
-    std::vector<map::KeyFramePtr> references{last_reference_};
-    for (auto& kf : last_reference_->best_covisibles(
-             static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
-      references.push_back(std::move(kf));
+    std::vector<dynamics::ReferenceView> references;
+    map_->read_consistent([&] {
+      std::vector<map::KeyFramePtr> keyframes{last_reference_};
+      for (auto& kf : last_reference_->best_covisibles(
+               static_cast<std::size_t>(config_.dynamic.geometry.max_reference_keyframes - 1))) {
+        keyframes.push_back(std::move(kf));
+      }
+      references = dynamic_->reference_views(keyframes);
+    });
+    if (!LocalMappingGate::unchanged(stops_before, mapping_gate_.stop_sequence())) {
+      ++stats_.geometry_checks_skipped;
+      references.clear();  // no geometry mask for this frame
     }
     masks.geometry =
         dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);

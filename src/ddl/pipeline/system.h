@@ -65,6 +65,8 @@ struct SystemStatistics {
   std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose
   std::size_t geometry_checks_predicted = 0;  // ... at the constant-velocity prediction (fallback)
   std::size_t geometry_checks_implausible = 0;  // ... whose mask the seed-fraction gate dropped
+  // ... not run: a loop correction or global-BA merge moved the keyframes meanwhile (threaded)
+  std::size_t geometry_checks_skipped = 0;
   DenseStats dense;
 };
 
