@@ -100,8 +100,10 @@ struct CullingScene {
 };
 
 CullingScene make_culling_scene(std::size_t unique, int level = 1, int kf3_level = 1,
-                                float depth_m = 2.0f) {
+                                float depth_m = 2.0f, int ids_used_before = 0) {
   CullingScene s;
+  // As after a map reset: ids keep counting (Map::clear), the new map's first is not 0.
+  for (int i = 0; i < ids_used_before; ++i) s.map->next_keyframe_id();
   for (int k = 0; k < 5; ++k) {
     const std::size_t n = 50 + (k == 0 || k == 4 ? unique : 0);
     s.kfs.push_back(add_keyframe(*s.map, crafted_features(n, k == 3 ? kf3_level : level, depth_m)));
@@ -168,6 +170,39 @@ TEST(KeyFrameCulling, CullsRedundantCovisiblesButNeverTheFirstOrProtected) {
   // Released by loop closing, the protected keyframe is culled then.
   s.kfs[2]->set_not_erase(false);
   EXPECT_TRUE(s.kfs[2]->is_bad());
+}
+
+// Review finding (stop 13): culling and KeyFrame::set_bad tested `id == 0` for the map's first
+// keyframe, which after a reset has a higher id; it was culled like any other.
+TEST(KeyFrameCulling, NeverCullsTheFirstKeyframeOfAMapMadeAfterAReset) {
+  CullingScene s = make_culling_scene(0, 1, 1, 2.0f, /*ids_used_before=*/3);
+  ASSERT_EQ(s.kfs[0]->id(), 3u);
+  EXPECT_TRUE(s.kfs[0]->is_origin());
+  EXPECT_FALSE(s.kfs[1]->is_origin());
+  EXPECT_TRUE(is_redundant_keyframe(*s.kfs[0], 3.0, KeyFrameCullingConfig{}));
+  cull_redundant_keyframes(s.kfs[4], *s.map, *s.database, 3.0, KeyFrameCullingConfig{});
+  EXPECT_FALSE(s.kfs[0]->is_bad());
+  EXPECT_FALSE(s.kfs[0]->set_bad());
+  EXPECT_TRUE(s.kfs[1]->is_bad());
+}
+
+// Review finding (stop 13): a keyframe culled when loop closing released it left the points it
+// took below the observation minimum in the map's index.
+TEST(KeyFrameCulling, AKeyframeCulledOnReleaseTakesItsOrphanedPointsOutOfTheMap) {
+  CullingScene s = make_culling_scene(10);
+  const map::MapPointPtr pair_point = add_point(*s.map, s.kfs[2]);
+  observe(pair_point, s.kfs[2], 0);
+  observe(pair_point, s.kfs[4], 0);
+  s.kfs[2]->set_not_erase(true);
+  cull_redundant_keyframes(s.kfs[4], *s.map, *s.database, 3.0, KeyFrameCullingConfig{});
+  ASSERT_FALSE(s.kfs[2]->is_bad());
+  const std::size_t points_before = s.map->map_point_count();
+  s.kfs[2]->set_not_erase(false);  // deferred culling happens now
+  ASSERT_TRUE(s.kfs[2]->is_bad());
+  ASSERT_TRUE(pair_point->is_bad());       // one observer left
+  s.map->erase_culled_keyframe(s.kfs[2]);  // what LoopCloser::release does
+  EXPECT_EQ(s.map->map_point_count(), points_before - 1);
+  EXPECT_EQ(s.map->keyframe(s.kfs[2]->id()), nullptr);
 }
 
 TEST(KeyFrameCulling, DisabledCullsNothing) {

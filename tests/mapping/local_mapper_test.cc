@@ -28,8 +28,10 @@ struct MappingRun {
 /// points inherit the error), keyframe 0 is exact (the gauge).
 MappingRun run_mapping(std::uint64_t seed, const LocalMapperConfig& config, bool with_bow,
                        const std::atomic<bool>* abort = nullptr,
-                       const test::ViewOptions& options = {}) {
+                       const test::ViewOptions& options = {}, int ids_used_before = 0) {
   MappingRun run;
+  // As after a map reset: ids keep counting (Map::clear), the new map's first is not 0.
+  for (int i = 0; i < ids_used_before; ++i) run.map->next_keyframe_id();
   std::mt19937_64 rng(seed);
   SyntheticWorld world;
   world.points = SyntheticWorld::room(2000, 2.5, 1.5, rng);
@@ -136,6 +138,20 @@ TEST(LocalMapper, LocalBundleAdjustmentRemovesInjectedErrors) {
   EXPECT_LT(point_after, 0.015);
   // The first keyframe is the gauge and does not move.
   EXPECT_EQ(run.keyframes[0]->T_c_w().translation(), run.truth[0].translation());
+}
+
+// Review finding (stop 13): local BA fixed the keyframe with id 0 as the gauge; after a map reset
+// the new map has none, so nothing was fixed and the young map could drift as a whole.
+TEST(LocalMapper, TheFirstKeyframeOfAMapMadeAfterAResetIsTheGauge) {
+  const MappingRun run =
+      run_mapping(21, test_config(), /*with_bow=*/true, nullptr, {}, /*ids_used_before=*/7);
+  ASSERT_EQ(run.keyframes[0]->id(), 7u);
+  EXPECT_TRUE(run.keyframes[0]->is_origin());
+  EXPECT_EQ(run.keyframes[0]->T_c_w().translation(), run.truth[0].translation());
+  EXPECT_LT(mean_center_error(run, false), 0.005);
+  // The origin is the root of the spanning tree: it never takes a parent.
+  EXPECT_EQ(run.keyframes[0]->parent(), nullptr);
+  EXPECT_NE(run.keyframes[1]->parent(), nullptr);
 }
 
 TEST(LocalMapper, ComputesMissingBowAndConnectsKeyframes) {

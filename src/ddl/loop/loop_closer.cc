@@ -91,7 +91,7 @@ void LoopCloser::release(const map::KeyFramePtr& keyframe) {
   keyframe->set_not_erase(false);
   // Culling that was deferred while the keyframe was protected happens now.
   if (keyframe->is_bad()) {
-    map_->erase_keyframe(keyframe->id());
+    map_->erase_culled_keyframe(keyframe);  // with the points it left without observers
     database_->erase(keyframe->id());
   }
 }

@@ -147,7 +147,7 @@ void KeyFrame::update_connections() {
     std::lock_guard lock(graph_mutex_);
     links_ = std::move(links);
     rebuild_ordered_locked();
-    if (first_connection_ && id_ != 0) {
+    if (first_connection_ && !origin_.load()) {
       first_connection_ = false;
       parent_ = strongest;
       set_parent_now = true;
@@ -289,7 +289,7 @@ bool KeyFrame::set_bad() {
   std::shared_ptr<KeyFrame> parent;
   {
     std::lock_guard lock(graph_mutex_);
-    if (id_ == 0 || bad_) return false;
+    if (origin_.load() || bad_) return false;
     if (not_erase_) {
       to_be_erased_ = true;
       return false;

@@ -5,6 +5,7 @@
 // Thread-safety: every method locks the keyframe's own mutexes; any thread may call any method.
 // Links to other keyframes are weak; the Map owns entities.
 
+#include <atomic>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -82,13 +83,18 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::vector<std::shared_ptr<KeyFrame>> loop_edges() const;
 
   // --- life cycle -----------------------------------------------------------------------------
+  /// The first keyframe of its map (Map::add_keyframe marks it): the gauge of local BA, the root
+  /// of the spanning tree, never culled. ORB-SLAM2 tests id 0, but ids are not reset with the map
+  /// here (Map::clear), so after a reset the new map's first keyframe has a higher id.
+  bool is_origin() const { return origin_.load(); }
+  void mark_origin() { origin_.store(true); }
   /// Loop closing protects keyframes it is working with from culling.
   void set_not_erase(bool protect);
   bool is_erase_protected() const;
   bool is_bad() const;
   /// Marks bad, detaches from points and covisibility, and re-parents its children in the
-  /// spanning tree (ORB-SLAM2 SetBadFlag). The first keyframe (id 0) is never set bad.
-  /// Returns false when it did nothing (protected or first keyframe).
+  /// spanning tree (ORB-SLAM2 SetBadFlag). The map's origin keyframe is never set bad.
+  /// Returns false when it did nothing (protected or origin).
   bool set_bad();
   /// Pose relative to the parent, kept when the keyframe became bad so the camera trajectory
   /// can still be recovered through it.
@@ -129,6 +135,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   bool not_erase_ = false;
   bool to_be_erased_ = false;
   bool bad_ = false;
+  std::atomic<bool> origin_{false};
 };
 
 using KeyFramePtr = std::shared_ptr<KeyFrame>;

@@ -5,6 +5,7 @@ namespace ddl::map {
 bool Map::add_keyframe(const KeyFramePtr& keyframe) {
   std::lock_guard lock(index_mutex_);
   if (keyframe->id() < floor_) return false;
+  if (keyframes_.empty()) keyframe->mark_origin();
   keyframes_[keyframe->id()] = keyframe;
   return true;
 }
@@ -14,6 +15,15 @@ bool Map::add_map_point(const MapPointPtr& point) {
   if (point->first_keyframe_id() < floor_) return false;
   points_[point->id()] = point;
   return true;
+}
+
+void Map::erase_culled_keyframe(const KeyFramePtr& keyframe) {
+  const std::vector<MapPointPtr> points = keyframe->map_points();
+  std::lock_guard lock(index_mutex_);
+  keyframes_.erase(keyframe->id());
+  for (const MapPointPtr& point : points) {
+    if (point && point->is_bad()) points_.erase(point->id());
+  }
 }
 
 void Map::erase_keyframe(KeyFrameId id) {

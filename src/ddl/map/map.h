@@ -32,11 +32,15 @@ class Map {
   MapPointId next_map_point_id() { return next_map_point_id_.fetch_add(1); }
 
   /// Adds the keyframe, unless it was made for the map that clear() emptied (its id is below
-  /// the floor clear() returned): then nothing happens and false is returned.
+  /// the floor clear() returned): then nothing happens and false is returned. The first keyframe
+  /// added to an empty map becomes its origin (KeyFrame::mark_origin).
   bool add_keyframe(const KeyFramePtr& keyframe);
   /// Adds the point, unless it was made by a keyframe of the map that clear() emptied
   /// (MapPoint::first_keyframe_id below the floor): then false.
   bool add_map_point(const MapPointPtr& point);
+  /// Removes a keyframe that KeyFrame::set_bad() culled, and the points it left with too few
+  /// observations (they became bad when it detached from them).
+  void erase_culled_keyframe(const KeyFramePtr& keyframe);
   /// Removes from the index (call after KeyFrame::set_bad / MapPoint::set_bad).
   void erase_keyframe(KeyFrameId id);
   void erase_map_point(MapPointId id);

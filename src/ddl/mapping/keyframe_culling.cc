@@ -37,15 +37,11 @@ std::vector<map::KeyFrameId> cull_redundant_keyframes(const map::KeyFramePtr& cu
   std::vector<map::KeyFrameId> culled;
   if (!config.enabled) return culled;
   for (const map::KeyFramePtr& keyframe : current->covisibles()) {
-    if (keyframe->id() == 0 || keyframe->is_bad()) continue;
+    if (keyframe->is_origin() || keyframe->is_bad()) continue;
     if (!is_redundant_keyframe(*keyframe, close_depth_m, config)) continue;
     if (!keyframe->set_bad()) continue;  // protected by loop closing: culled on release
-    map.erase_keyframe(keyframe->id());
+    map.erase_culled_keyframe(keyframe);
     database.erase(keyframe->id());
-    // Points left with too few observations became bad when it detached from them.
-    for (const map::MapPointPtr& point : keyframe->map_points()) {
-      if (point && point->is_bad()) map.erase_map_point(point->id());
-    }
     culled.push_back(keyframe->id());
   }
   return culled;

@@ -56,7 +56,7 @@ LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, m
   for (const auto& [id, kf] : local) {
     kf_index[id] = kf_list.size();
     kf_list.push_back(kf);
-    problem.keyframes.push_back({kf->T_c_w(), id == 0});  // the first keyframe is the gauge
+    problem.keyframes.push_back({kf->T_c_w(), kf->is_origin()});  // the gauge
   }
   for (const auto& [id, kf] : fixed) {
     kf_index[id] = kf_list.size();

@@ -87,7 +87,7 @@ NewPointsResult create_new_map_points(const map::KeyFramePtr& current, map::Map&
       if (cos_rays < cos_stereo && cos_rays > 0.0 &&
           (stereo1 || stereo2 || cos_rays < config.max_parallax_cos)) {
         p_w = triangulate_linear(T1_c_w, T2_c_w, xn1, xn2);
-      } else if (stereo1 && cos_stereo1 < cos_stereo2) {
+      } else if (stereo1 && cos_stereo1 <= cos_stereo2) {  // a tie (equal depths): the first
         p_w = unproject_feature_w(f1, i1, camera, T1_c_w);
       } else if (stereo2 && cos_stereo2 < cos_stereo1) {
         p_w = unproject_feature_w(f2, i2, camera, T2_c_w);
