@@ -17,8 +17,10 @@
 
 #include "cli_support.h"
 #include "commands.h"
+#include "ddl/config/dataset_config.h"
 #include "ddl/core/error.h"
 #include "ddl/eval/benchmark_tables.h"
+#include "ddl/io/dataset_factory.h"
 #include "run_command.h"
 
 namespace ddl::app {
@@ -132,6 +134,13 @@ int bench(const BenchArgs& args) {
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
 
+  // The settings are the same for every sequence: a bad --config, --mode or --segmentation is
+  // reported once, as bad input (exit 2), before any run.
+  make_system_config(args.run);
+  if (!args.run.camera.empty() && !sequences.empty()) {
+    config::resolve_dataset_camera(sequences.front().dir, args.run.camera,
+                                   io::parse_dataset_kind(args.run.dataset_kind, "--dataset-kind"));
+  }
   const auto vocabulary = load_vocabulary(resolve_vocabulary(args.run.vocabulary_path));
   const json settings = settings_json(args, sequences.size());
   std::vector<eval::BenchmarkRow> rows;

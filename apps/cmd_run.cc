@@ -45,9 +45,7 @@ std::shared_ptr<const vocabulary::Vocabulary> load_vocabulary(const std::string&
   return vocabulary;
 }
 
-RunResult run_sequence_command(const RunArgs& args,
-                               std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
-                               const std::atomic<bool>* stop) {
+pipeline::SystemConfig make_system_config(const RunArgs& args) {
   const std::string shared_dir = resolve_shared_dir(args.shared_dir);
 
   pipeline::SystemConfig config = args.config_path.empty()
@@ -69,6 +67,13 @@ RunResult run_sequence_command(const RunArgs& args,
   config.shared_dir = shared_dir;
   config.output_dir = args.output_dir;
   config.validate();
+  return config;
+}
+
+RunResult run_sequence_command(const RunArgs& args,
+                               std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
+                               const std::atomic<bool>* stop) {
+  const pipeline::SystemConfig config = make_system_config(args);
 
   io::DatasetOptions dataset_options;
   dataset_options.kind = io::parse_dataset_kind(args.dataset_kind, "--dataset-kind");
@@ -83,7 +88,11 @@ RunResult run_sequence_command(const RunArgs& args,
 
   if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
-  fs::create_directories(args.output_dir);
+  std::error_code dir_error;
+  fs::create_directories(args.output_dir, dir_error);
+  if (dir_error) {
+    throw InputError::at(args.output_dir, "cannot create output folder: " + dir_error.message());
+  }
   {
     const fs::path config_out = fs::path(args.output_dir) / "config.yaml";
     std::ofstream file(config_out);

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "ddl/pipeline/system_config.h"
 #include "ddl/vocabulary/vocabulary.h"
 
 namespace ddl::app {
@@ -44,6 +45,10 @@ std::string resolve_vocabulary(const std::string& flag);
 
 /// Loads a vocabulary, logging its size and load time.
 std::shared_ptr<const vocabulary::Vocabulary> load_vocabulary(const std::string& path);
+
+/// The settings of a run: the --config file (or the defaults) with the flags applied, validated.
+/// Throws ddl::InputError / ddl::ConfigError naming the file or key.
+pipeline::SystemConfig make_system_config(const RunArgs& args);
 
 /// Runs one sequence with its outputs in args.output_dir, progress on stderr. `vocabulary`:
 /// already loaded, or nullptr to load resolve_vocabulary(args.vocabulary_path). `stop` ends the

@@ -426,7 +426,7 @@ TEST(GeometryCheck, ConfigErrorsNameTheKey) {
   GeometryCheckConfig config;
   config.max_parallax_deg = 0;
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
-                                                        "dynamics.max_parallax_deg"));
+                                                        "dynamic.geometry.max_parallax_deg"));
   GeometryCheckConfig gate;
   gate.max_median_residual_ratio = 0;
   EXPECT_THROW(gate.validate(), ConfigError);

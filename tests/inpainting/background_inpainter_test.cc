@@ -265,7 +265,7 @@ TEST(Inpainting, ConfigErrorsNameTheKey) {
   InpaintingConfig config;
   config.num_keyframes = 0;
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
-                                                        "inpainting.num_keyframes"));
+                                                        "dense.inpainting.num_keyframes"));
 }
 
 }  // namespace

@@ -241,7 +241,34 @@ TEST(BenchInput, BadInputNamesTheFolder) {
       2);
   EXPECT_NE(log.find("groundtruth.txt"), std::string::npos) << log;
   EXPECT_NE(log.find(no_gt.string()), std::string::npos) << log;
+
+  // Review finding (stop 13): a bad --config was reported once per sequence, each run "failed",
+  // exit 1. The settings are the same for all: one error, exit 2, before any run.
+  std::ofstream(no_gt / "groundtruth.txt") << "# empty\n";
+  const fs::path bad_config = root / "bad.yaml";
+  std::ofstream(bad_config) << "tracking:\n  nonsense_key: 1\n";
+  EXPECT_EQ(
+      run_shell(Bench::command("--sequences '" + no_gt.string() + "' --config '" +
+                               bad_config.string() + "' --out '" + (root / "bad3").string() + "'"),
+                root / "bad3.log", &log),
+      2);
+  const std::size_t first = log.find("nonsense_key");
+  ASSERT_NE(first, std::string::npos) << log;
+  EXPECT_EQ(log.find("nonsense_key", first + 1), std::string::npos) << log;
   fs::remove_all(root);
+}
+
+// Review finding (stop 13): --first-frame beyond the last frame ran nothing, wrote empty
+// trajectories and exited 0.
+TEST_F(Bench, AFirstFrameBeyondTheSequenceIsBadInput) {
+  std::string log;
+  const std::string command = std::string("'") + DDL_SLAM_BINARY +
+                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
+                              (*root_ / "walk").string() + "' --first-frame 1000 --out '" +
+                              (*root_ / "first_frame").string() + "'";
+  EXPECT_EQ(run_shell(command, *root_ / "first_frame.log", &log), 2);
+  EXPECT_NE(log.find("--first-frame"), std::string::npos) << log;
+  EXPECT_NE(log.find("40 frames"), std::string::npos) << log;
 }
 
 }  // namespace

@@ -254,7 +254,7 @@ TEST(OctreeMap, ConfigErrorsNameTheKey) {
   OctreeConfig config;
   config.resolution_m = 0;
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
-                                                        "octomap.resolution_m"));
+                                                        "dense.octree.resolution_m"));
 }
 
 }  // namespace

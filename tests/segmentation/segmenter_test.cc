@@ -52,10 +52,69 @@ TEST(Segmenter, MissingModelIsAClearError) {
   try {
     make_segmenter(config, shared_dir());
     FAIL() << "expected an error";
-  } catch (const InputError& e) {
+  } catch (const ModelNotFoundError& e) {  // the one error that allows geometry-only operation
     EXPECT_NE(std::string(e.what()).find("/nonexistent/model.onnx"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos);
   }
+}
+
+// Review finding (stop 13): a model that exists but does not load was taken for a missing one
+// (and the run went on without the CNN) when OpenCV's reason contained "not found".
+TEST(Segmenter, AnInvalidModelIsNeverTakenForAMissingOne) {
+  const fs::path dir = fs::temp_directory_path() / "ddl_model not found";
+  fs::create_directories(dir);
+  const fs::path bad = dir / "model.onnx";
+  std::ofstream(bad) << "this is not a protobuf";
+  SegmenterConfig config;
+  config.model_path = bad.string();
+  EXPECT_THROW(
+      {
+        try {
+          make_segmenter(config, shared_dir());
+        } catch (const ModelNotFoundError&) {
+          ADD_FAILURE() << "an invalid model reported as missing";
+        }
+      },
+      InputError);
+  // A missing mask folder is an error too, never a missing model.
+  SegmenterConfig folder;
+  folder.backend = Backend::kFolder;
+  folder.mask_folder = (dir / "no such folder").string();
+  EXPECT_THROW(
+      {
+        try {
+          make_segmenter(folder, "");
+        } catch (const ModelNotFoundError&) {
+          ADD_FAILURE() << "a missing mask folder reported as a missing model";
+        }
+      },
+      InputError);
+  fs::remove_all(dir);
+}
+
+// Review finding (stop 13): a relative model path was looked up in the working directory first,
+// although the settings document it as relative to the shared folder.
+TEST(Segmenter, ARelativeModelPathIsLookedUpInTheSharedFolderFirst) {
+  SegmenterConfig config;
+  if (!fs::exists(fs::path(shared_dir()) / config.model_path)) GTEST_SKIP() << "no model";
+  const fs::path work = fs::temp_directory_path() / "ddl_cwd_with_stale_model";
+  fs::create_directories(work / fs::path(config.model_path).parent_path());
+  std::ofstream(work / config.model_path) << "a stale, broken copy";
+  const fs::path before = fs::current_path();
+  fs::current_path(work);
+  std::unique_ptr<Segmenter> segmenter;
+  EXPECT_NO_THROW(segmenter = make_segmenter(config, shared_dir()));
+  fs::current_path(before);
+  ASSERT_TRUE(segmenter);
+  EXPECT_NE(segmenter->description().find(shared_dir()), std::string::npos);
+  fs::remove_all(work);
+}
+
+TEST(Segmenter, DilationIsBounded) {
+  SegmenterConfig config;
+  config.dilation_px = 100000;  // a 200001-pixel kernel
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.segmentation.dilation_px"));
 }
 
 TEST(Segmenter, InvalidModelFileIsAClearError) {
@@ -77,7 +136,7 @@ TEST(Segmenter, UnknownDynamicClassNamesTheKey) {
   SegmenterConfig config;
   config.dynamic_classes = {"person", "unicorn"};
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
-                                                        "segmentation.dynamic_classes"));
+                                                        "dynamic.segmentation.dynamic_classes"));
   EXPECT_TRUE(test_support::throws_config_error_naming([&] { config.validate(); }, "unicorn"));
 }
 
@@ -95,6 +154,11 @@ TEST(Segmenter, FolderBackendReadsMasksByFrameName) {
   const auto result = segmenter->segment(bgr, "rgb/1305031102.175304.png");
   EXPECT_EQ(cv::countNonZero(result.dynamic_mask), 200);
   EXPECT_THROW(segmenter->segment(bgr, "rgb/missing.png"), InputError);
+  // 16-bit label images: any non-zero value is dynamic (it was read as its high byte).
+  cv::Mat labels16 = cv::Mat::zeros(40, 60, CV_16UC1);
+  labels16(cv::Rect(0, 0, 5, 4)).setTo(1);
+  cv::imwrite((dir / "16bit.png").string(), labels16);
+  EXPECT_EQ(cv::countNonZero(segmenter->segment(bgr, "rgb/16bit.png").dynamic_mask), 20);
   fs::remove_all(dir);
 }
 

@@ -12,7 +12,7 @@ namespace ddl::dynamics {
 
 void GeometryCheckConfig::validate() const {
   auto fail = [](const char* key, const std::string& what) {
-    throw ConfigError::for_key(std::string("dynamics.") + key, what);
+    throw ConfigError::for_key(std::string("dynamic.geometry.") + key, what);
   };
   if (max_reference_keyframes < 1) fail("max_reference_keyframes", "must be >= 1");
   if (!(max_parallax_deg > 0 && max_parallax_deg <= 180))

@@ -79,7 +79,7 @@ struct GeometryCheckConfig {
     return depth_threshold_m + depth_threshold_quadratic * z * z;
   }
 
-  /// Throws ddl::ConfigError naming "dynamics.<field>".
+  /// Throws ddl::ConfigError naming "dynamic.geometry.<field>" (its place in the settings).
   void validate() const;
 };
 

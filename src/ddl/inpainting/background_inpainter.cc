@@ -13,7 +13,7 @@ namespace ddl::inpainting {
 
 void InpaintingConfig::validate() const {
   auto fail = [](const char* key, const char* what) {
-    throw ConfigError::for_key(std::string("inpainting.") + key, what);
+    throw ConfigError::for_key(std::string("dense.inpainting.") + key, what);
   };
   if (num_keyframes < 1 || num_keyframes > 255) fail("num_keyframes", "must be in 1..255");
   if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");

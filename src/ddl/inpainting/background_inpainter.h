@@ -52,7 +52,7 @@ struct InpaintingConfig {
   /// source's mask missed, and is left unfilled. 0 = off.
   int see_through_votes = 2;
 
-  /// Throws ddl::ConfigError naming "inpainting.<field>".
+  /// Throws ddl::ConfigError naming "dense.inpainting.<field>" (its place in the settings).
   void validate() const;
 };
 

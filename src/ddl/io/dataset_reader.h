@@ -26,6 +26,10 @@ class DatasetReader {
   virtual RgbdFrame frame(std::size_t i) const = 0;
   /// The camera of the frames that frame() returns (undistorted).
   virtual const camera::PinholeCamera& camera() const = 0;
+  /// A single-channel image in the stored images' pixel grid (a precomputed mask made for an
+  /// RGB file) moved onto the grid of the frames frame() returns, nearest neighbour. Identity
+  /// for datasets stored without distortion.
+  virtual cv::Mat undistort_mask(const cv::Mat& stored) const { return stored; }
   /// Path of the ground-truth trajectory (TUM format) when the dataset has one.
   virtual std::optional<std::string> groundtruth_path() const = 0;
   /// Short dataset name for logs and summaries (e.g. "rgbd_dataset_freiburg1_rpy").

@@ -78,6 +78,9 @@ class TumDataset : public DatasetReader {
   RgbdFrame frame(std::size_t i) const override;
   /// The undistorted camera (what frame() returns).
   const camera::PinholeCamera& camera() const override { return camera_; }
+  cv::Mat undistort_mask(const cv::Mat& stored) const override {
+    return undistorter_.undistort_depth(stored);  // nearest neighbour, no new values
+  }
   std::optional<std::string> groundtruth_path() const override { return groundtruth_path_; }
   std::string name() const override { return name_; }
 

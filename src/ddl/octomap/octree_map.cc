@@ -19,7 +19,7 @@ namespace ddl::octomap {
 
 void OctreeConfig::validate() const {
   auto fail = [](const char* key, const char* what) {
-    throw ConfigError::for_key(std::string("octomap.") + key, what);
+    throw ConfigError::for_key(std::string("dense.octree.") + key, what);
   };
   if (!(resolution_m >= 0.005 && resolution_m <= 1.0))
     fail("resolution_m", "must be in [0.005, 1]");

@@ -34,7 +34,7 @@ struct OctreeConfig {
   double clamping_max = 0.97;
   double occupancy_threshold = 0.5;
 
-  /// Throws ddl::ConfigError naming "octomap.<field>".
+  /// Throws ddl::ConfigError naming "dense.octree.<field>" (its place in the settings).
   void validate() const;
 };
 

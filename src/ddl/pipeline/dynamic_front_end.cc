@@ -34,9 +34,8 @@ DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::Pinh
   if (!config_.enabled || !config_.use_segmentation) return;
   try {
     segmenter_ = segmentation::make_segmenter(config_.segmentation, shared_dir);
-  } catch (const InputError& e) {
-    const bool missing = std::string(e.what()).find("not found") != std::string::npos;
-    if (!missing || !config_.fallback_without_model) throw;
+  } catch (const segmentation::ModelNotFoundError& e) {
+    if (!config_.fallback_without_model) throw;
     spdlog::warn(
         "{}; running with the multi-view geometry check only (set "
         "dynamic.segmentation.model_path or --shared-dir)",
@@ -53,8 +52,9 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
   if (!segmenter_) return out;
   const Stopwatch watch;
   // The schedule depends only on the frame indices, so it is the same on every run.
+  const bool folder = config_.segmentation.backend == segmentation::Backend::kFolder;
   const bool reuse =
-      last_cnn_index_ && frame.index > *last_cnn_index_ &&
+      !folder && last_cnn_index_ && frame.index > *last_cnn_index_ &&
       frame.index - *last_cnn_index_ < static_cast<std::size_t>(config_.segmentation_interval);
   // last_cnn_mask_ never shares its buffer with a published mask, which goes on to tracking and
   // the dense thread: OpenCV's reference counts (inside libopencv_core) are invisible to
@@ -72,7 +72,9 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
     if (out.mask.data == last_cnn_mask_.data) out.mask = last_cnn_mask_.clone();  // unchanged
     out.reused = true;
   } else {
-    out.mask = trimmed(segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask);
+    cv::Mat mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+    if (folder && stored_mask_mapping_) mask = stored_mask_mapping_(mask);
+    out.mask = trimmed(mask);
     last_cnn_mask_ = out.mask.clone();
     last_cnn_index_ = frame.index;
   }

@@ -7,6 +7,7 @@
 // (SegmentationStage) while the other methods run on the tracking thread (they share no state but
 // the keyframe depth cache, which is locked); cnn_mask() itself from one thread at a time.
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -56,8 +57,16 @@ class DynamicFrontEnd {
   bool has_segmenter() const { return segmenter_ != nullptr; }
   std::string segmenter_description() const;
 
+  /// Moves a mask of the folder backend (made for the stored RGB file) onto the frames' pixel
+  /// grid (io::DatasetReader::undistort_mask). Call before the first cnn_mask(); without it the
+  /// masks are used as read.
+  void set_stored_mask_mapping(std::function<cv::Mat(const cv::Mat&)> mapping) {
+    stored_mask_mapping_ = std::move(mapping);
+  }
+
   /// CNN mask of one frame (empty when segmentation is off); frames in index order. With
-  /// dynamic.segmentation_interval > 1 most frames reuse the last inferred mask, grown.
+  /// dynamic.segmentation_interval > 1 most frames of the ONNX backend reuse the last inferred
+  /// mask, grown (the schedule saves CNN time; the folder backend reads every frame's mask).
   CnnMask cnn_mask(const io::RgbdFrame& frame);
 
   /// What the geometry check needs of the reference keyframes (best overlap first, at most
@@ -109,6 +118,7 @@ class DynamicFrontEnd {
   cv::Mat last_cnn_mask_;  // cnn_mask()'s thread only
   std::optional<std::size_t> last_cnn_index_;
   mutable std::mutex cache_mutex_;
+  std::function<cv::Mat(const cv::Mat&)> stored_mask_mapping_;
   struct KeyframeImages {
     cv::Mat depth_m;
     cv::Mat dynamic_mask;

@@ -67,7 +67,15 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
 
-  const std::size_t begin = std::min(options.first_frame, dataset.size());
+  if (options.first_frame > 0 && options.first_frame >= dataset.size()) {
+    throw ConfigError::for_key("first_frame (--first-frame)",
+                               fmt::format("is {} but {} has {} frames", options.first_frame,
+                                           dataset.name(), dataset.size()));
+  }
+  const std::size_t begin = options.first_frame;
+  // Masks precomputed for the stored RGB files reach the frames' (undistorted) grid.
+  system.set_stored_mask_mapping(
+      [&dataset](const cv::Mat& mask) { return dataset.undistort_mask(mask); });
   std::size_t end = dataset.size();
   if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
   const std::size_t total = end - begin;

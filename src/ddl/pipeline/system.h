@@ -105,6 +105,10 @@ class System {
   std::shared_ptr<const map::Map> map() const { return map_; }
   const DenseMapper& dense_mapper() const { return *dense_; }
   const DynamicFrontEnd& dynamic_front_end() const { return *dynamic_; }
+  /// See DynamicFrontEnd::set_stored_mask_mapping; before the first process() or segment().
+  void set_stored_mask_mapping(std::function<cv::Mat(const cv::Mat&)> mapping) {
+    dynamic_->set_stored_mask_mapping(std::move(mapping));
+  }
   const SystemConfig& config() const { return config_; }
 
  private:

@@ -32,26 +32,31 @@ std::vector<std::string> default_dynamic_classes() {
 void SegmenterConfig::validate() const {
   if (backend == Backend::kOnnx) {
     if (model_path.empty()) {
-      throw ConfigError::for_key("segmentation.model_path", "must name an ONNX file");
+      throw ConfigError::for_key("dynamic.segmentation.model_path", "must name an ONNX file");
     }
     if (input_width < 32 || input_width > 4096 || input_height < 32 || input_height > 4096) {
       throw ConfigError::for_key(
-          "segmentation.input_width/input_height",
+          "dynamic.segmentation.input_width/input_height",
           fmt::format("must be in 32..4096 (got {}x{})", input_width, input_height));
     }
   }
   if (backend == Backend::kFolder && mask_folder.empty()) {
-    throw ConfigError::for_key("segmentation.mask_folder", "must be set for the folder backend");
+    throw ConfigError::for_key("dynamic.segmentation.mask_folder",
+                               "must be set for the folder backend");
   }
-  if (class_names.empty()) throw ConfigError::for_key("segmentation.class_names", "is empty");
+  if (class_names.empty())
+    throw ConfigError::for_key("dynamic.segmentation.class_names", "is empty");
   for (const auto& name : dynamic_classes) {
     if (std::find(class_names.begin(), class_names.end(), name) == class_names.end()) {
-      throw ConfigError::for_key("segmentation.dynamic_classes",
+      throw ConfigError::for_key("dynamic.segmentation.dynamic_classes",
                                  fmt::format("'{}' is not one of the model's classes", name));
     }
   }
-  if (num_threads < 1) throw ConfigError::for_key("segmentation.num_threads", "must be >= 1");
-  if (dilation_px < 0) throw ConfigError::for_key("segmentation.dilation_px", "must be >= 0");
+  if (num_threads < 1)
+    throw ConfigError::for_key("dynamic.segmentation.num_threads", "must be >= 1");
+  if (dilation_px < 0 || dilation_px > 50) {
+    throw ConfigError::for_key("dynamic.segmentation.dilation_px", "must be in 0..50");
+  }
 }
 
 cv::Mat mask_from_labels(const cv::Mat& labels, const std::set<int>& dynamic_labels) {
@@ -175,7 +180,8 @@ class FolderSegmenter final : public Segmenter {
   SegmentationResult segment(const cv::Mat& bgr, const std::string& source_path) override {
     const fs::path mask_path =
         fs::path(config_.mask_folder) / (fs::path(source_path).stem().string() + ".png");
-    cv::Mat mask = cv::imread(mask_path.string(), cv::IMREAD_GRAYSCALE);
+    // Any depth (8- or 16-bit label images): non-zero = dynamic.
+    const cv::Mat mask = cv::imread(mask_path.string(), cv::IMREAD_ANYDEPTH);
     if (mask.empty()) throw InputError::at(mask_path.string(), "mask missing or unreadable");
     if (mask.size() != bgr.size()) {
       throw InputError::at(
@@ -183,7 +189,7 @@ class FolderSegmenter final : public Segmenter {
           fmt::format("mask is {}x{}, the frame {}x{}", mask.cols, mask.rows, bgr.cols, bgr.rows));
     }
     SegmentationResult result;
-    cv::threshold(mask, result.dynamic_mask, 0, 255, cv::THRESH_BINARY);
+    cv::compare(mask, 0, result.dynamic_mask, cv::CMP_GT);
     result.dynamic_mask = dilate(result.dynamic_mask, config_.dilation_px);
     return result;
   }
@@ -215,15 +221,19 @@ std::unique_ptr<Segmenter> make_segmenter(const SegmenterConfig& config,
     case Backend::kFolder:
       return std::make_unique<FolderSegmenter>(config);
     case Backend::kOnnx: {
+      // Relative paths: the shared folder first (as documented), the working directory second.
       fs::path model(config.model_path);
-      if (model.is_relative() && !fs::exists(model)) model = fs::path(shared_dir) / model;
+      if (model.is_relative() && !shared_dir.empty() && fs::exists(fs::path(shared_dir) / model)) {
+        model = fs::path(shared_dir) / model;
+      }
       if (!fs::exists(model)) {
-        throw InputError::at(model.string(), "segmentation model not found");
+        throw ModelNotFoundError(
+            InputError::at(model.string(), "segmentation model not found").what());
       }
       return std::make_unique<OnnxSegmenter>(config, model.string());
     }
   }
-  throw ConfigError::for_key("segmentation.backend", "unknown backend");
+  throw ConfigError::for_key("dynamic.segmentation.backend", "unknown backend");
 }
 
 }  // namespace ddl::segmentation

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "ddl/core/error.h"
+
 namespace ddl::segmentation {
 
 /// PASCAL VOC class names, index = label (0 background ... 20 tvmonitor).
@@ -30,16 +32,17 @@ struct SegmenterConfig {
   Backend backend = Backend::kOnnx;
   /// ONNX model; {W}x{H} in the name is not interpreted: input_width/height must match the model.
   /// 320x240 by default: 2.8x cheaper than 512x384 for 0.05 less IoU (docs/dynamics.md, Speed).
-  std::string model_path = "models/espnetv2_s2.0_voc_320x240.onnx";  // relative to the shared dir
+  std::string model_path = "models/espnetv2_s2.0_voc_320x240.onnx";  // in shared dir, else cwd
   int input_width = 320;  // network input size in pixels (the ONNX files have fixed sizes)
   int input_height = 240;
   std::vector<std::string> class_names = voc_class_names();              // label index -> name
   std::vector<std::string> dynamic_classes = default_dynamic_classes();  // masked as dynamic
   int num_threads = 1;      // OpenCV threads; cv::setNumThreads is process-wide (docs/dynamics.md)
-  std::string mask_folder;  // kFolder: where the precomputed masks are
+  std::string mask_folder;  // kFolder: one mask per RGB file (docs/dynamics.md, Backends)
   int dilation_px = 0;      // grow the mask by this many pixels after upsampling
 
-  /// Throws ddl::ConfigError naming the key ("segmentation.<field>").
+  /// Throws ddl::ConfigError naming the key ("dynamic.segmentation.<field>", its place in the
+  /// settings).
   void validate() const;
 };
 
@@ -57,10 +60,19 @@ class Segmenter {
   virtual std::string description() const = 0;
 };
 
-/// Creates the configured backend. For kOnnx, `model_path` is resolved against `shared_dir` when
-/// relative. A missing model file throws ddl::InputError naming it (the caller decides whether to
-/// fall back to geometry-only operation, with a warning); an invalid model file throws
-/// ddl::InputError naming the file and OpenCV's reason.
+/// The configured model file does not exist. Only this error lets the caller fall back to
+/// geometry-only operation (dynamic.fallback_without_model); every other problem with the model
+/// or the mask folder is an InputError that ends the run.
+class ModelNotFoundError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
+/// Creates the configured backend. For kOnnx, a relative `model_path` is looked up in
+/// `shared_dir` first, then in the working directory. A missing model file throws
+/// ModelNotFoundError naming it (the caller decides whether to fall back to geometry-only
+/// operation, with a warning); an invalid model file throws ddl::InputError naming the file and
+/// OpenCV's reason; a missing mask folder (kFolder) throws ddl::InputError naming it.
 std::unique_ptr<Segmenter> make_segmenter(const SegmenterConfig& config,
                                           const std::string& shared_dir);
 

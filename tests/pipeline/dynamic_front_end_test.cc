@@ -1,0 +1,94 @@
+// The dynamic front end's use of the segmentation backends (review findings of stop 13).
+
+#include "ddl/pipeline/dynamic_front_end.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "ddl/core/error.h"
+#include "ddl/synthetic/sequence.h"
+
+namespace ddl::pipeline {
+namespace {
+namespace fs = std::filesystem;
+
+class FolderBackend : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / "ddl_front_end_masks";
+    fs::create_directories(dir_);
+    // Frame "a": the left half dynamic; frame "b": the top-right corner.
+    cv::Mat a = cv::Mat::zeros(camera_.height, camera_.width, CV_8UC1);
+    a.colRange(0, camera_.width / 2).setTo(255);
+    cv::Mat b = cv::Mat::zeros(camera_.height, camera_.width, CV_8UC1);
+    b(cv::Rect(camera_.width - 50, 0, 50, 40)).setTo(255);
+    cv::imwrite((dir_ / "a.png").string(), a);
+    cv::imwrite((dir_ / "b.png").string(), b);
+    config_.segmentation.backend = segmentation::Backend::kFolder;
+    config_.segmentation.mask_folder = dir_.string();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  io::RgbdFrame frame(std::size_t index, const std::string& name) const {
+    io::RgbdFrame f;
+    f.index = index;
+    f.rgb = cv::Mat(camera_.height, camera_.width, CV_8UC3, cv::Scalar(90, 90, 90));
+    f.rgb_path = "rgb/" + name + ".png";  // no depth: the depth trim leaves the mask alone
+    return f;
+  }
+
+  camera::PinholeCamera camera_ = synthetic::tum3_camera();
+  DynamicConfig config_;
+  fs::path dir_;
+};
+
+// The CNN schedule (dynamic.segmentation_interval, default 2) reused the previous mask, grown, on
+// every second frame; precomputed masks cost nothing, and each frame has its own.
+TEST_F(FolderBackend, EveryFrameGetsItsOwnMask) {
+  ASSERT_GE(config_.segmentation_interval, 2);
+  DynamicFrontEnd front_end(config_, camera_, "");
+  ASSERT_TRUE(front_end.has_segmenter());
+  const CnnMask first = front_end.cnn_mask(frame(0, "a"));
+  const CnnMask second = front_end.cnn_mask(frame(1, "b"));
+  EXPECT_FALSE(second.reused);
+  EXPECT_EQ(cv::countNonZero(first.mask), camera_.height * camera_.width / 2);
+  EXPECT_EQ(cv::countNonZero(second.mask), 50 * 40);
+}
+
+// Masks made for the stored RGB files (e.g. the distorted TUM images) are moved onto the grid of
+// the undistorted frames by the dataset's mapping.
+TEST_F(FolderBackend, MasksGoThroughTheStoredToFrameMapping) {
+  DynamicFrontEnd front_end(config_, camera_, "");
+  front_end.set_stored_mask_mapping([](const cv::Mat& stored) {
+    cv::Mat mirrored;
+    cv::flip(stored, mirrored, 1);
+    return mirrored;
+  });
+  const cv::Mat mask = front_end.cnn_mask(frame(0, "a")).mask;
+  EXPECT_EQ(cv::countNonZero(mask.colRange(0, camera_.width / 2)), 0);
+  EXPECT_EQ(cv::countNonZero(mask.colRange(camera_.width / 2, camera_.width)),
+            camera_.height * camera_.width / 2);
+}
+
+// Only a missing model file may turn into geometry-only operation; a mistyped mask folder ran
+// without any masks and a warning about model_path.
+TEST_F(FolderBackend, AMissingFolderEndsTheRunInsteadOfFallingBack) {
+  ASSERT_TRUE(config_.fallback_without_model);
+  config_.segmentation.mask_folder = (dir_ / "typo").string();
+  EXPECT_THROW(DynamicFrontEnd(config_, camera_, ""), InputError);
+}
+
+TEST(DynamicFrontEndModel, AMissingModelFallsBackToGeometryOnly) {
+  DynamicConfig config;
+  config.segmentation.model_path = "/nonexistent/model.onnx";
+  const DynamicFrontEnd front_end(config, synthetic::tum3_camera(), "");
+  EXPECT_FALSE(front_end.has_segmenter());
+  config.fallback_without_model = false;
+  EXPECT_THROW(DynamicFrontEnd(config, synthetic::tum3_camera(), ""), InputError);
+}
+
+}  // namespace
+}  // namespace ddl::pipeline
