@@ -87,11 +87,15 @@ NewPointsResult create_new_map_points(const map::KeyFramePtr& current, map::Map&
       if (cos_rays < cos_stereo && cos_rays > 0.0 &&
           (stereo1 || stereo2 || cos_rays < config.max_parallax_cos)) {
         p_w = triangulate_linear(T1_c_w, T2_c_w, xn1, xn2);
-      } else if (stereo1 && cos_stereo1 <= cos_stereo2) {  // a tie (equal depths): the first
+      } else if (stereo1 && cos_stereo1 < cos_stereo2) {
         p_w = unproject_feature_w(f1, i1, camera, T1_c_w);
       } else if (stereo2 && cos_stereo2 < cos_stereo1) {
         p_w = unproject_feature_w(f2, i2, camera, T2_c_w);
       }
+      // Equal depths in both keyframes (a tie) drop the match here, as in ORB-SLAM2.
+      // Back-projecting the first instead (review of stop 13) made 35% more points on a sideways
+      // test move but cost the bench: walking_rpy ATE 0.0033 -> 0.0062 m, static_rpy 0.0024 ->
+      // 0.0026 m (out/bench11, docs/RESULTS.md), so ORB-SLAM2's rule stays.
       if (!p_w) continue;
 
       const Vec3d p_c1 = T1_c_w * *p_w;
