@@ -13,6 +13,7 @@
 
 #include "cli_support.h"
 #include "commands.h"
+#include "ddl/config/dataset_config.h"
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
 #include "ddl/synthetic/preview.h"
@@ -52,6 +53,10 @@ synthetic::SequenceConfig config_for(const synthetic::Preset& preset, const Synt
   }
   if (!args.background.empty()) {
     config.background_dir = args.background;
+    // The background's own camera (freiburg1/2/3 from the folder name, or its camera.yaml):
+    // people are drawn, and camera.yaml written, with it. It was always fr1's until 2026-11-26
+    // (found by review): on fr3 frames the people sat 4-8 px off the real scene.
+    config.background_camera = config::resolve_dataset_camera(args.background, "");
     // A preset's void boxes (world frame) describe its own background sequence only.
     const fs::path own = fs::path(preset.background_in_shared).filename();
     fs::path given = fs::path(args.background).lexically_normal();

@@ -258,6 +258,46 @@ TEST(BenchInput, BadInputNamesTheFolder) {
   fs::remove_all(root);
 }
 
+// Review finding (stop 13): `synth --background` drew the people with fr1's camera whatever the
+// sequence, and wrote fr1's camera.yaml. Five frames of fr1_rpy in a folder named as an fr3
+// sequence must come out with the fr3 camera.
+TEST(SynthBackground, TheCompositeUsesTheBackgroundsCamera) {
+  const fs::path real = fs::path(shared_dir()) / "data/tum/rgbd_dataset_freiburg1_rpy";
+  if (!fs::exists(real / "associations.txt")) GTEST_SKIP() << "no fr1_rpy in " << shared_dir();
+  const fs::path root = fs::temp_directory_path() /
+                        ("ddl_synth_bg_" + std::to_string(static_cast<long long>(getpid())));
+  const fs::path bg = root / "rgbd_dataset_freiburg3_copy";
+  fs::create_directories(bg / "rgb");
+  fs::create_directories(bg / "depth");
+  std::ifstream associations(real / "associations.txt");
+  std::ofstream out_assoc(bg / "associations.txt");
+  std::string line;
+  for (int n = 0; n < 5 && std::getline(associations, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string t_rgb, rgb, t_depth, depth;
+    fields >> t_rgb >> rgb >> t_depth >> depth;
+    fs::copy_file(real / rgb, bg / rgb);
+    fs::copy_file(real / depth, bg / depth);
+    out_assoc << line << "\n";
+    ++n;
+  }
+  out_assoc.close();
+  fs::copy_file(real / "groundtruth.txt", bg / "groundtruth.txt");
+  std::string log;
+  const std::string command = std::string("'") + DDL_SLAM_BINARY +
+                              "' --log-level warn synth --shared-dir '" + shared_dir() +
+                              "' --preset syn_walking_xyz --frames 3 --background '" + bg.string() +
+                              "' --out '" + (root / "out").string() + "'";
+  ASSERT_EQ(run_shell(command, root / "synth.log", &log), 0) << log;
+  std::ifstream camera_file(root / "out" / "camera.yaml");
+  std::stringstream camera;
+  camera << camera_file.rdbuf();
+  EXPECT_NE(camera.str().find("535.4"), std::string::npos) << camera.str();  // fr3's fx
+  EXPECT_EQ(camera.str().find("517.3"), std::string::npos) << camera.str();  // fr1's fx
+  fs::remove_all(root);
+}
+
 // Review finding (stop 13): --first-frame beyond the last frame ran nothing, wrote empty
 // trajectories and exited 0.
 TEST_F(Bench, AFirstFrameBeyondTheSequenceIsBadInput) {
