@@ -19,7 +19,8 @@
 // at a depth edge (pose error, rounding, edge dropouts) is not taken for motion. On fast motion
 // the window grows with the point's image motion since the previous frame (motion_window_gain),
 // which absorbs the RGB-depth time offset and rolling shutter of real sensors; windows wider than
-// 9x9 are sampled on a 9x9 grid.
+// 9x9 are sampled with a step of ceil(r / 4), up to 9x9 samples (whose reach can fall a few
+// pixels short of r: measured and kept, geometry_check.cc).
 // Pure functions of their inputs: thread-safe.
 
 #include <functional>
