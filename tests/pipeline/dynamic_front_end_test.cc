@@ -3,6 +3,7 @@
 #include "ddl/pipeline/dynamic_front_end.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <opencv2/core.hpp>
@@ -18,7 +19,11 @@ namespace fs = std::filesystem;
 class FolderBackend : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / "ddl_front_end_masks";
+    // One folder per test and process: ctest -j runs the tests of this fixture side by side.
+    dir_ = fs::temp_directory_path() /
+           ("ddl_front_end_masks_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(static_cast<long long>(getpid())));
     fs::create_directories(dir_);
     // Frame "a": the left half dynamic; frame "b": the top-right corner.
     cv::Mat a = cv::Mat::zeros(camera_.height, camera_.width, CV_8UC1);
