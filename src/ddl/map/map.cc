@@ -26,11 +26,6 @@ void Map::erase_culled_keyframe(const KeyFramePtr& keyframe) {
   }
 }
 
-void Map::erase_keyframe(KeyFrameId id) {
-  std::lock_guard lock(index_mutex_);
-  keyframes_.erase(id);
-}
-
 void Map::erase_map_point(MapPointId id) {
   std::lock_guard lock(index_mutex_);
   points_.erase(id);

@@ -41,8 +41,7 @@ class Map {
   /// Removes a keyframe that KeyFrame::set_bad() culled, and the points it left with too few
   /// observations (they became bad when it detached from them).
   void erase_culled_keyframe(const KeyFramePtr& keyframe);
-  /// Removes from the index (call after KeyFrame::set_bad / MapPoint::set_bad).
-  void erase_keyframe(KeyFrameId id);
+  /// Removes a point from the index (call after MapPoint::set_bad).
   void erase_map_point(MapPointId id);
 
   /// Live keyframes / points sorted by id (bad ones are skipped).

@@ -44,16 +44,18 @@ void SegmenterConfig::validate() const {
     throw ConfigError::for_key("dynamic.segmentation.mask_folder",
                                "must be set for the folder backend");
   }
-  if (class_names.empty())
+  if (class_names.empty()) {
     throw ConfigError::for_key("dynamic.segmentation.class_names", "is empty");
+  }
   for (const auto& name : dynamic_classes) {
     if (std::find(class_names.begin(), class_names.end(), name) == class_names.end()) {
       throw ConfigError::for_key("dynamic.segmentation.dynamic_classes",
                                  fmt::format("'{}' is not one of the model's classes", name));
     }
   }
-  if (num_threads < 1)
+  if (num_threads < 1) {
     throw ConfigError::for_key("dynamic.segmentation.num_threads", "must be >= 1");
+  }
   if (dilation_px < 0 || dilation_px > 50) {
     throw ConfigError::for_key("dynamic.segmentation.dilation_px", "must be in 0..50");
   }
