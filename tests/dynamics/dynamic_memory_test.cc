@@ -221,6 +221,48 @@ TEST(DynamicMemory, SpillOntoSurfacesAKeyframeSawAsStaticIsNotRemembered) {
   }
 }
 
+// A loop correction moves the keyframes around the camera, and with them the camera poses that
+// follow, by a rigid T_new_old: what the memory keeps in the world frame must move too.
+TEST(DynamicMemory, MoveWorldFollowsACorrectionOfTheMap) {
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
+  DynamicMemoryConfig config;
+  config.erode_px = 0;
+  config.recall_band_px = 0;
+  const SE3 T_w_a = camera_at(0.0, 0.0);  // in the world before the correction
+  const View a = render(cam, T_w_a, Person{});
+  const SE3 T_w_b = camera_at(0.1, 34.0);  // the person cut by the border
+  const View b = render(cam, T_w_b, Person{});
+  const SE3 T_new_old(Mat3d(Eigen::AngleAxisd(0.15, Vec3d::UnitY())), Vec3d(0.4, -0.1, 0.2));
+  const SE3 T_c_new_b = (T_new_old * T_w_b).inverse();  // frame b's pose in the corrected map
+
+  for (const bool move : {false, true}) {
+    DynamicMemory memory(config, cam);
+    memory.remember(0, T_w_a, a.person_mask, a.depth_m, a.bgr);
+    if (move) memory.move_world(T_new_old);
+    const MaskScore score =
+        score_mask(memory.recall(20, T_c_new_b, b.depth_m, b.bgr), b.person_mask);
+    if (move) {
+      EXPECT_GT(score.recall, 0.9) << "IoU " << score.iou;
+      EXPECT_GT(score.precision, 0.97);
+    } else {
+      EXPECT_LT(score.recall, 0.3) << "the correction is too small to tell";
+    }
+  }
+
+  // The static views move too: spill onto the wall is still vetoed in the corrected world.
+  config.static_views = 5;
+  DynamicMemory memory(config, cam);
+  const SE3 T_w_k = camera_at(0.2, 5.0);
+  memory.add_static_view(T_w_k, render(cam, T_w_k, std::nullopt).depth_m, cv::Mat());
+  memory.move_world(T_new_old);
+  const cv::Mat spilled = feature_exclusion_mask(a.person_mask, 3);
+  memory.remember(1, T_new_old * T_w_a, spilled, a.depth_m, a.bgr);
+  const cv::Mat recalled = memory.recall(2, (T_new_old * T_w_a).inverse(), a.depth_m, a.bgr);
+  const int wall_in_mask = cv::countNonZero(spilled & ~a.person_mask);
+  EXPECT_LT(cv::countNonZero(recalled & ~a.person_mask), wall_in_mask / 20);
+  EXPECT_GT(score_mask(recalled, a.person_mask).recall, 0.97);
+}
+
 TEST(DynamicMemory, ConfigErrorsNameTheKey) {
   DynamicMemoryConfig config;
   config.max_age_frames = 0;

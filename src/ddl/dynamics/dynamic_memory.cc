@@ -56,6 +56,21 @@ void DynamicMemory::add_static_view(const SE3& T_w_c, const cv::Mat& depth_m,
   }
 }
 
+void DynamicMemory::move_world(const SE3& T_new_old) {
+  const Mat3d R = T_new_old.rotation();
+  const Vec3d& t = T_new_old.translation();
+  for (Snapshot& snapshot : snapshots_) {
+    for (Point& point : snapshot.points) {
+      const Vec3d p = R * Vec3d(point.x, point.y, point.z) + t;
+      point.x = static_cast<float>(p.x());
+      point.y = static_cast<float>(p.y());
+      point.z = static_cast<float>(p.z());
+    }
+  }
+  const SE3 T_old_new = T_new_old.inverse();
+  for (StaticView& view : static_views_) view.T_c_w = view.T_c_w * T_old_new;
+}
+
 bool DynamicMemory::seen_as_static(const Vec3d& p_w) const {
   for (const StaticView& view : static_views_) {
     const Vec3d p_c = view.T_c_w * p_w;

@@ -96,6 +96,12 @@ class DynamicMemory {
   /// non-zero = dynamic; may be empty). The last config.static_views are kept.
   void add_static_view(const SE3& T_w_c, const cv::Mat& depth_m, const cv::Mat& dynamic_mask);
 
+  /// Moves what is kept in the world frame (remembered points, static-view poses) by the rigid
+  /// motion T_new_old that a loop correction or global-BA merge gave the keyframes around the
+  /// camera (pipeline::MapCorrectionFollower), so that recall() at poses in the corrected map
+  /// finds the remembered surfaces where they were seen.
+  void move_world(const SE3& T_new_old);
+
   /// Forgets everything (map reset: the old poses mean nothing any more).
   void clear() {
     snapshots_.clear();

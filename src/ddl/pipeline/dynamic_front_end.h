@@ -97,6 +97,10 @@ class DynamicFrontEnd {
   /// Remembers the frame's CNN mask at its tracked pose T_w_c; reused masks are not remembered.
   void remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c, const CnnMask& cnn);
 
+  /// Moves the remembered detections with a loop correction or global-BA merge (T_w_new_w_old,
+  /// from MapCorrectionFollower).
+  void move_dynamic_surfaces(const SE3& T_new_old) { memory_.move_world(T_new_old); }
+
   /// Forgets the remembered detections (map reset).
   void forget_dynamic_surfaces() { memory_.clear(); }
 

@@ -56,6 +56,7 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   loop_closer_ =
       std::make_unique<loop::LoopCloser>(loop_config, camera_, map_, vocabulary_, database_);
   dynamic_ = std::make_unique<DynamicFrontEnd>(config_.dynamic, camera_, config_.shared_dir);
+  memory_anchor_ = std::make_unique<MapCorrectionFollower>(map_);
   DenseMapperConfig dense_config = config_.dense;
   dense_config.threaded = config_.mode == RunMode::kThreaded;
   dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
@@ -152,6 +153,11 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
   if (use_memory) {
     // Where people the CNN found in the last frames still are (it misses those cut by the border).
     const Stopwatch memory_watch;
+    if (const std::optional<SE3> T_new_old = memory_anchor_->correction()) {
+      spdlog::debug("frame {}: dynamic memory moved with the map by {:.3f} m", frame.index,
+                    T_new_old->translation().norm());
+      dynamic_->move_dynamic_surfaces(*T_new_old);
+    }
     masks.memory = dynamic_->memory_mask(frame, *T_c_w, &masks.memory_stats);
     timings_.record("dynamic_memory", memory_watch.elapsed_ms());
   }
@@ -217,7 +223,13 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     velocity_ = last_T_c_w_ ? std::optional<SE3>(T_c_w * last_T_c_w_->inverse()) : std::nullopt;
     last_T_c_w_ = T_c_w;
     last_reference_ = result.reference_keyframe;
-    if (cnn) dynamic_->remember_cnn_mask(frame, *result.T_w_c, {masks.cnn, 0.0, cnn->reused});
+    if (cnn && dynamic_->memory_enabled()) {
+      if (const std::optional<SE3> T_new_old = memory_anchor_->correction()) {
+        dynamic_->move_dynamic_surfaces(*T_new_old);
+      }
+      dynamic_->remember_cnn_mask(frame, *result.T_w_c, {masks.cnn, 0.0, cnn->reused});
+      memory_anchor_->anchor(result.reference_keyframe);
+    }
   } else {
     last_T_c_w_.reset();
     velocity_.reset();
@@ -231,6 +243,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     // in threaded mode): every keyframe created from now on has an id above the one reserved here.
     last_reference_.reset();
     dynamic_->forget_dynamic_surfaces();
+    memory_anchor_->reset();
     const map::KeyFrameId first_valid_keyframe = map_->next_keyframe_id();
     mapper_->request_reset(first_valid_keyframe);
     loop_closer_->request_reset(first_valid_keyframe);

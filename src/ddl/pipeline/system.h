@@ -44,6 +44,7 @@
 #include "ddl/pipeline/dense_mapper.h"
 #include "ddl/pipeline/dynamic_front_end.h"
 #include "ddl/pipeline/local_mapping_gate.h"
+#include "ddl/pipeline/map_correction_follower.h"
 #include "ddl/pipeline/system_config.h"
 #include "ddl/tracking/tracker.h"
 #include "ddl/vocabulary/bow_database.h"
@@ -140,6 +141,8 @@ class System {
   std::optional<SE3> last_T_c_w_;
   std::optional<SE3> velocity_;  // T_c(k) c(k-1)
   map::KeyFramePtr last_reference_;
+  // The dynamic memory's world-frame data follows loop corrections and global-BA merges.
+  std::unique_ptr<MapCorrectionFollower> memory_anchor_;
   int frames_since_keyframe_ = 1 << 20;  // deterministic mapping-busy emulation
   TimingStats timings_;
   SystemStatistics stats_;
