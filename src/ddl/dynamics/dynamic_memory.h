@@ -37,7 +37,7 @@ struct DynamicMemoryConfig {
   /// the background next to a person, and remembered background would be re-marked as long as it
   /// is remembered (static, so its depth always agrees).
   int erode_px = 4;
-  double depth_tolerance_m = 0.05;          // agreement at z = 0 (people move meanwhile)
+  double depth_tolerance_m = 0.15;          // agreement at z = 0 (people move meanwhile)
   double depth_tolerance_quadratic = 0.01;  // grows by this times z^2, like the depth noise
   double min_depth_m = 0.3;                 // ignore depths closer than this
   double max_depth_m = 6.0;                 // and farther than this

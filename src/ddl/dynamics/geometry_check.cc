@@ -49,6 +49,12 @@ cv::Mat grow_regions(const cv::Mat& depth_m, const std::vector<cv::Point>& seeds
   for (const cv::Point& seed : seeds) {
     const int existing = region_id.at<int>(seed);
     if (existing > 0) {
+      // Every seed counts, also one at a pixel that gave a seed already (mostly another
+      // reference's view of the same point): two references that both saw a point moved
+      // confirm it as well as two points do.
+      // Counting only seeds at distinct pixels (review of stop 13) was measured and left out
+      // (stop 14): composite ATE 0.0239 -> 0.0404 m; seeds more than 2 px apart: composite
+      // geometry IoU 0.448 -> 0.039 and ATE 0.057 m, syn_walking_rpy ATE 0.0033 -> 0.0066 m.
       ++support[static_cast<std::size_t>(existing - 1)];
       continue;
     }
