@@ -311,5 +311,34 @@ TEST_F(Bench, AFirstFrameBeyondTheSequenceIsBadInput) {
   EXPECT_NE(log.find("40 frames"), std::string::npos) << log;
 }
 
+// Review finding (stop 14): the run's tracked ratio divided every estimated pose by the frames
+// inside the ground-truth span, so a ground truth that covers part of the run gave more than 1
+// (here 40 / 35).
+TEST_F(Bench, TheTrackedRatioCountsOnlyFramesInsideTheGroundTruth) {
+  const fs::path sequence = *root_ / "walk_half_truth";
+  fs::remove_all(sequence);
+  fs::copy(*root_ / "walk", sequence, fs::copy_options::recursive);
+  std::ifstream full(*root_ / "walk" / "groundtruth.txt");
+  std::ofstream half(sequence / "groundtruth.txt");
+  int poses = 0;
+  for (std::string line; std::getline(full, line);) {
+    const bool comment = line.empty() || line[0] == '#';
+    if (!comment && ++poses > 35) break;
+    half << line << '\n';
+  }
+  half.close();
+  const fs::path out = *root_ / "half_truth_run";
+  const std::string command = std::string("'") + DDL_SLAM_BINARY +
+                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
+                              sequence.string() + "' --no-dynamic --no-octomap --no-inpainting " +
+                              "--out '" + out.string() + "'";
+  std::string log;
+  ASSERT_EQ(run_shell(command, *root_ / "half_truth.log", &log), 0) << log;
+  const json summary = read_json(out / "summary.json");
+  ASSERT_EQ(summary["frames_processed"].get<int>(), 40);
+  ASSERT_EQ(summary["statistics"]["frames_tracked"].get<int>(), 40) << "the premise: all tracked";
+  EXPECT_NEAR(summary["evaluation"]["tracked_ratio"].get<double>(), 1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace ddl

@@ -1,8 +1,12 @@
 #include "ddl/pipeline/dense_mapper.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <tuple>
 
 #include "ddl/map/map.h"
@@ -101,6 +105,105 @@ TEST(DenseMapper, AMapResetDropsTheStoredKeyframesAndTheOctree) {
         << "threaded " << threaded;
     EXPECT_NE(kept->octree()->stats().occupied_leaves, fresh->octree()->stats().occupied_leaves);
   }
+}
+
+// A culled keyframe's own pose stops moving when it is culled; after a loop correction it must be
+// taken through its parent, as the camera trajectory takes it. Until 2026-11-26 inpainting used
+// its frozen pose as a source, and octree rebuilds left it out.
+TEST(DenseMapper, ACulledKeyframeMovesWithItsParentInInpaintingAndRebuilds) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  // A striped wall at world z = 2 m, seen from (x, 0, 0) looking along +z; `person` adds a
+  // nearer red block and returns its mask.
+  auto render = [&](double x, bool person) {
+    cv::Mat bgr(camera.height, camera.width, CV_8UC3);
+    cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+    cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const double X = x + (u - camera.cx) / camera.fx * 2.0;
+        const double Y = (v - camera.cy) / camera.fy * 2.0;
+        bgr.at<cv::Vec3b>(v, u) =
+            cv::Vec3b(cv::saturate_cast<std::uint8_t>(128 + 100 * std::sin(40 * X)),
+                      cv::saturate_cast<std::uint8_t>(128 + 100 * std::cos(23 * Y)),
+                      cv::saturate_cast<std::uint8_t>(128 + 60 * std::sin(11 * X + 7 * Y)));
+      }
+    }
+    if (person) {
+      const cv::Rect block(250, 150, 120, 180);
+      mask(block).setTo(255);
+      bgr(block).setTo(cv::Scalar(0, 0, 255));
+      depth(block).setTo(1.0f);
+    }
+    return std::make_tuple(bgr, depth, mask);
+  };
+  auto pose_at = [](double x) { return SE3(Mat3d::Identity(), Vec3d(x, 0.0, 0.0)); };
+  // True camera centres (the corrected map): A 0.0, B 0.25, C 0.12. Before the loop correction,
+  // which moves the map by 8 cm, A and B were at -0.08 and 0.17.
+  const double shift = 0.08;
+  struct Outcome {
+    long filled = 0;
+    std::size_t scans = 0;
+    std::size_t occupied = 0;
+    cv::Mat repaired;
+  };
+  auto run = [&](bool cull_b) {
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / ("ddl_dense_culled_" + std::to_string(cull_b)))
+            .string();
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    auto map = std::make_shared<map::Map>();
+    DenseMapperConfig config;
+    config.mask_border_px = 0;
+    config.save_inpainted_dir = dir;
+    DenseMapper dense(config, camera, map);
+    auto add = [&](double x_before) {
+      auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), x_before,
+                                                std::make_shared<map::FrameFeatures>(),
+                                                pose_at(x_before).inverse());
+      map->add_keyframe(kf);
+      return kf;
+    };
+    const map::KeyFramePtr a = add(0.0 - shift);
+    const auto [a_bgr, a_depth, a_mask] = render(0.0, false);
+    dense.submit({a, a_bgr, a_depth, a_mask});
+    const map::KeyFramePtr b = add(0.25 - shift);
+    b->set_parent(a);
+    const auto [b_bgr, b_depth, b_mask] = render(0.25, false);
+    dense.submit({b, b_bgr, b_depth, b_mask});
+    if (cull_b) {
+      EXPECT_TRUE(b->set_bad());
+      map->erase_culled_keyframe(b);
+    }
+    // The loop correction moves the map's keyframes; a culled one is not in the map any more.
+    a->set_T_c_w(pose_at(0.0).inverse());
+    if (!cull_b) b->set_T_c_w(pose_at(0.25).inverse());
+    map->notify_big_change();
+    const map::KeyFramePtr c = add(0.12);
+    const auto [c_bgr, c_depth, c_mask] = render(0.12, true);
+    dense.submit({c, c_bgr, c_depth, c_mask});
+    dense.finish();
+    Outcome out;
+    out.filled = dense.stats().filled_pixels;
+    out.scans = dense.octree()->stats().scans_integrated;
+    out.occupied = dense.octree()->stats().occupied_leaves;
+    out.repaired = cv::imread(dir + "/" + fmt::format("{:.6f}", 0.12) + "_rgb.png");
+    std::filesystem::remove_all(dir);
+    return out;
+  };
+  const Outcome live = run(false);
+  const Outcome culled = run(true);
+  ASSERT_FALSE(live.repaired.empty());
+  ASSERT_FALSE(culled.repaired.empty());
+  EXPECT_GT(live.filled, 15000);
+  EXPECT_EQ(culled.filled, live.filled);
+  EXPECT_EQ(culled.scans, live.scans) << "the rebuild leaves the culled keyframe out";
+  EXPECT_EQ(culled.occupied, live.occupied);
+  cv::Mat difference;
+  cv::absdiff(culled.repaired, live.repaired, difference);
+  double max_difference = 0.0;
+  cv::minMaxLoc(difference.reshape(1), nullptr, &max_difference);
+  EXPECT_LE(max_difference, 1.0) << "the culled keyframe was used at its frozen pose";
 }
 
 }  // namespace

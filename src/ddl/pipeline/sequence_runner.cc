@@ -10,6 +10,7 @@
 #include "ddl/eval/evaluate.h"
 #include "ddl/eval/plot.h"
 #include "ddl/eval/report.h"
+#include "ddl/eval/tracked.h"
 #include "ddl/pipeline/frame_prefetcher.h"
 #include "ddl/pipeline/segmentation_stage.h"
 
@@ -185,17 +186,18 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       eval::write_json_report((eval_dir / "eval.json").string(), result);
       eval::write_eval_plots(result, eval_dir.string());
       nlohmann::json ev = eval::to_json(result);
-      // Tracked ratio against the frames that were processed.
-      std::size_t inside = 0;
-      const double gt_begin = result.groundtruth.front().timestamp_s;
-      const double gt_end = result.groundtruth.back().timestamp_s;
+      // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
+      // processed frames inside the ground-truth span, those with an estimated pose. Until
+      // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
+      // could push it above 1 (found by review).
+      std::vector<double> processed_stamps;
+      processed_stamps.reserve(done);
       for (std::size_t i = begin; i < begin + done; ++i) {
-        const double t = dataset.timestamp(i);
-        if (t >= gt_begin && t <= gt_end) ++inside;
+        processed_stamps.push_back(dataset.timestamp(i));
       }
-      ev["tracked_ratio"] =
-          inside > 0 ? static_cast<double>(result.estimate.size()) / static_cast<double>(inside)
-                     : 0.0;
+      const eval::TrackedStats tracked =
+          eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
+      ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;
       summary["evaluation"] = ev;
       spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
                    result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
