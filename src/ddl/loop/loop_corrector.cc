@@ -87,7 +87,9 @@ LoopCorrectionStatistics correct_loop(const map::KeyFramePtr& current, const Loo
     for (const map::KeyFramePtr& other : kf->covisibles()) before.insert(other->id());
     kf->update_connections();
     std::set<map::KeyFrameId>& links = graph.loop_connections[id];
-    for (const map::KeyFramePtr& other : kf->covisibles()) {
+    // Every keyframe it shares a point with now (ORB-SLAM2 LoopConnections): the current and
+    // the loop keyframe get their edge even when they share fewer than 15 points.
+    for (const map::KeyFramePtr& other : kf->connected_keyframes()) {
       if (before.count(other->id()) != 0 || connected.count(other->id()) != 0) continue;
       links.insert(other->id());
     }

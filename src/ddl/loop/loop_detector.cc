@@ -17,19 +17,19 @@ LoopDetector::LoopDetector(const LoopDetectionConfig& config, std::shared_ptr<ma
 std::vector<map::KeyFramePtr> LoopDetector::candidates(const map::KeyFramePtr& keyframe) const {
   const vocabulary::BowVector& bow = keyframe->bow();
   if (bow.empty()) return {};
-  const std::vector<map::KeyFramePtr> connected = keyframe->covisibles();
-
   // 1. The lowest score among the covisibles: a loop candidate must look at least as similar.
   double min_score = 1.0;
-  for (const map::KeyFramePtr& kf : connected) {
+  for (const map::KeyFramePtr& kf : keyframe->covisibles()) {
     if (kf->is_bad() || !kf->has_bow()) continue;
     min_score = std::min(min_score, vocabulary::l1_score(bow, kf->bow()));
   }
 
-  // 2. Database query without the keyframe and its covisibles.
+  // 2. Database query without the keyframe and every keyframe it shares a point with (ORB-SLAM2
+  // GetConnectedKeyFrames). Until 2026-11-26 only the covisibles of weight >= 15 were left out,
+  // so a recent keyframe sharing a few points could be taken for a loop (found by review).
   std::unordered_set<vocabulary::EntryId> exclude;
   exclude.insert(keyframe->id());
-  for (const map::KeyFramePtr& kf : connected) exclude.insert(kf->id());
+  for (const map::KeyFramePtr& kf : keyframe->connected_keyframes()) exclude.insert(kf->id());
   const std::vector<vocabulary::QueryResult> results = database_->query(bow, 0, 0.0, exclude);
   if (results.empty()) return {};
   std::uint32_t max_common = 0;
@@ -103,7 +103,7 @@ LoopDetector::Detection LoopDetector::detect(const map::KeyFramePtr& keyframe) {
   for (const map::KeyFramePtr& candidate : found) {
     Group group;
     group.insert(candidate->id());
-    for (const map::KeyFramePtr& kf : candidate->covisibles()) group.insert(kf->id());
+    for (const map::KeyFramePtr& kf : candidate->connected_keyframes()) group.insert(kf->id());
 
     bool enough = false;
     bool consistent_with_some = false;

@@ -128,7 +128,9 @@ void KeyFrame::update_connections() {
   std::shared_ptr<KeyFrame> strongest;
   int strongest_weight = 0;
   std::map<KeyFrameId, Link> links;
+  std::map<KeyFrameId, std::weak_ptr<KeyFrame>> connected;
   for (const auto& [id, entry] : counts) {
+    connected[id] = entry.first;
     if (entry.second > strongest_weight) {
       strongest_weight = entry.second;
       strongest = entry.first;
@@ -146,6 +148,7 @@ void KeyFrame::update_connections() {
   {
     std::lock_guard lock(graph_mutex_);
     links_ = std::move(links);
+    connected_ = std::move(connected);
     rebuild_ordered_locked();
     if (first_connection_ && !origin_.load()) {
       first_connection_ = false;
@@ -159,12 +162,31 @@ void KeyFrame::update_connections() {
 void KeyFrame::add_connection(const std::shared_ptr<KeyFrame>& other, int weight) {
   std::lock_guard lock(graph_mutex_);
   links_[other->id()] = Link{other, weight};
+  connected_[other->id()] = other;
   rebuild_ordered_locked();
 }
 
 void KeyFrame::erase_connection(KeyFrameId other_id) {
   std::lock_guard lock(graph_mutex_);
+  connected_.erase(other_id);
   if (links_.erase(other_id) > 0) rebuild_ordered_locked();
+}
+
+std::vector<std::shared_ptr<KeyFrame>> KeyFrame::connected_keyframes() const {
+  std::vector<std::shared_ptr<KeyFrame>> linked;
+  {
+    std::lock_guard lock(graph_mutex_);
+    linked.reserve(connected_.size());
+    for (const auto& [id, weak] : connected_) {
+      if (auto kf = weak.lock()) linked.push_back(std::move(kf));
+    }
+  }
+  // is_bad() locks the other keyframe: only after releasing our own lock.
+  std::vector<std::shared_ptr<KeyFrame>> out;
+  for (auto& kf : linked) {
+    if (!kf->is_bad()) out.push_back(std::move(kf));
+  }
+  return out;
 }
 
 std::vector<std::shared_ptr<KeyFrame>> KeyFrame::best_covisibles(std::size_t n) const {
@@ -285,6 +307,7 @@ bool KeyFrame::is_bad() const {
 
 bool KeyFrame::set_bad() {
   std::map<KeyFrameId, Link> links;
+  std::map<KeyFrameId, std::weak_ptr<KeyFrame>> connected;
   std::vector<std::shared_ptr<KeyFrame>> children;
   std::shared_ptr<KeyFrame> parent;
   {
@@ -295,6 +318,7 @@ bool KeyFrame::set_bad() {
       return false;
     }
     links.swap(links_);
+    connected.swap(connected_);
     ordered_.clear();
     for (const auto& [id, weak] : children_) {
       if (auto kf = weak.lock()) children.push_back(std::move(kf));
@@ -303,8 +327,8 @@ bool KeyFrame::set_bad() {
     parent = parent_.lock();
   }
   const auto self_id = id_;
-  for (const auto& [id, link] : links) {
-    if (auto other = link.keyframe.lock()) other->erase_connection(self_id);
+  for (const auto& [id, weak] : connected) {  // every link is in `connected` too
+    if (auto other = weak.lock()) other->erase_connection(self_id);
   }
   for (const MapPointPtr& p : map_points()) {
     if (p) p->erase_observation(self_id);

@@ -71,6 +71,11 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::vector<std::shared_ptr<KeyFrame>> best_covisibles(std::size_t n) const;
   std::vector<std::shared_ptr<KeyFrame>> covisibles() const;
   std::vector<std::shared_ptr<KeyFrame>> covisibles_with_min_weight(int min_weight) const;
+  /// Every keyframe that shared at least one map point with this one at its last
+  /// update_connections(), and those that linked to it since (ORB-SLAM2 GetConnectedKeyFrames,
+  /// which loop detection excludes and groups by), by id. covisibles() keeps only weight >= 15.
+  std::vector<std::shared_ptr<KeyFrame>> connected_keyframes() const;
+  /// Weight of the covisibility link (0 below 15 shared points, unless it is the strongest).
   int weight(KeyFrameId other_id) const;
 
   // --- spanning tree and loop edges ----------------------------------------------------------
@@ -127,7 +132,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
   mutable std::mutex graph_mutex_;
   std::map<KeyFrameId, Link> links_;
-  std::vector<std::pair<int, KeyFrameId>> ordered_;  // weight desc, id asc
+  std::vector<std::pair<int, KeyFrameId>> ordered_;          // weight desc, id asc
+  std::map<KeyFrameId, std::weak_ptr<KeyFrame>> connected_;  // see connected_keyframes()
   std::weak_ptr<KeyFrame> parent_;
   std::map<KeyFrameId, std::weak_ptr<KeyFrame>> children_;
   std::map<KeyFrameId, std::weak_ptr<KeyFrame>> loop_edges_;
