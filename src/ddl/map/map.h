@@ -10,6 +10,7 @@
 // reader never sees half a correction. The lock itself is never exposed.
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -54,6 +55,9 @@ class Map {
 
   /// Runs f under the exclusive update lock (writers moving many entities).
   void apply_update(const std::function<void()>& f);
+  /// How many apply_update() calls have run (counted under the lock): a reader that compares
+  /// two readings taken under read_consistent() knows whether such a write came in between.
+  std::uint64_t update_count() const { return update_count_.load(); }
   /// Runs f under the shared update lock (readers needing a consistent multi-entity view).
   void read_consistent(const std::function<void()>& f) const;
 
@@ -72,6 +76,7 @@ class Map {
   std::atomic<KeyFrameId> next_keyframe_id_{0};
   std::atomic<MapPointId> next_map_point_id_{0};
   std::atomic<int> big_change_index_{0};
+  std::atomic<std::uint64_t> update_count_{0};
   mutable std::mutex index_mutex_;
   std::map<KeyFrameId, KeyFramePtr> keyframes_;
   std::map<MapPointId, MapPointPtr> points_;

@@ -96,8 +96,10 @@ std::optional<SE3> Tracker::low_cost_pose(Frame& frame) {
   const TrackingState state = state_.load();
   if (state == TrackingState::kNotInitialized || state == TrackingState::kLost) return std::nullopt;
   const Stopwatch watch;
-  map_->read_consistent(
-      [&] { prepared_.initial_pose_ok = estimate_initial_pose(frame, prepared_.method); });
+  map_->read_consistent([&] {
+    prepared_.map_updates = map_->update_count();
+    prepared_.initial_pose_ok = estimate_initial_pose(frame, prepared_.method);
+  });
   prepared_.initial_pose_done = true;
   prepared_.initial_pose_ms = watch.elapsed_ms();
   if (!prepared_.initial_pose_ok) return std::nullopt;
@@ -174,6 +176,13 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
 
   bool ok = false;
   const bool was_lost = state_.load() == TrackingState::kLost;
+  if (prepared_.initial_pose_done && map_->update_count() != prepared_.map_updates) {
+    // Loop closing moved the map since low_cost_pose() (threaded mode): that pose, and the last
+    // frame it was predicted from, are in the old world frame. Estimate it again, as ORB-SLAM2
+    // does under one map-update lock from the initial pose to the local map (found by review).
+    frame.clear_map_points();
+    prepared_.initial_pose_done = false;
+  }
   if (prepared_.initial_pose_done) {
     // low_cost_pose() ran this step already (only while tracking was ok).
     ok = prepared_.initial_pose_ok;

@@ -107,6 +107,7 @@ class Tracker {
     bool initial_pose_ok = false;
     TrackingMethod method = TrackingMethod::kNone;
     double initial_pose_ms = 0.0;
+    std::uint64_t map_updates = 0;  // Map::update_count() when the initial pose was estimated
   };
 
   void track_locked(Frame& frame, const MappingStatus& mapping, TrackingResult& result);
