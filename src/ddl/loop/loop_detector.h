@@ -2,13 +2,15 @@
 // Loop candidate detection (ORB-SLAM2 LoopClosing::DetectLoop and
 // KeyFrameDatabase::DetectLoopCandidates; ORB-SLAM T-RO 2015 section VII-A):
 //   1. s_min = the lowest BoW score between the keyframe and its covisible keyframes;
-//   2. database query excluding the keyframe and its covisibles; keep keyframes sharing more than
-//      min_common_words_ratio of the best candidate's shared words and scoring >= s_min;
+//   2. database query excluding the keyframe and every keyframe it shares a map point with
+//      (KeyFrame::connected_keyframes, not only the covisibles of weight >= 15); keep keyframes
+//      sharing more than min_common_words_ratio of the best candidate's shared words and scoring
+//      >= s_min;
 //   3. group each with its best covisibles (accumulated score), keep the best keyframe of every
 //      group scoring more than min_group_score_ratio of the best group;
-//   4. a candidate is consistent when its covisibility group continues a group that was already
-//      consistent for the previous consistency_threshold keyframes (0: at once; the geometric
-//      verification still decides).
+//   4. a candidate is consistent when its group (itself and every keyframe it shares a point
+//      with) continues a group that was already consistent for the previous
+//      consistency_threshold keyframes (0: at once; the geometric verification still decides).
 // The candidates of step 3 that are not consistent yet are reported too: the loop closer may
 // accept one whose loop is confirmed in the keyframe's covisibles instead (loop_closer.h).
 // Thread-safety: one instance belongs to loop closing; detect() from one thread at a time.
