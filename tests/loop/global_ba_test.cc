@@ -15,9 +15,7 @@ using test::SyntheticWorld;
 
 TEST(GlobalBundleAdjustment, MergePropagatesToKeyframesAndPointsCreatedMeanwhile) {
   std::mt19937_64 rng(41);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(2500, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(2500, rng);
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();
   mapping::LocalMapperConfig config;
@@ -76,9 +74,7 @@ TEST(GlobalBundleAdjustment, MergePropagatesToKeyframesAndPointsCreatedMeanwhile
 
 TEST(GlobalBundleAdjustment, RaisedAbortStopsWithoutResult) {
   std::mt19937_64 rng(42);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(1500, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(1500, rng);
   auto map = std::make_shared<map::Map>();
   test::FakeTracker tracker(map, world);
   for (int k = 0; k < 3; ++k) {

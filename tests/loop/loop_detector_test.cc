@@ -19,9 +19,7 @@ using test::SyntheticWorld;
 // is no loop.
 TEST(LoopDetector, AKeyframeSharingAFewPointsIsNoCandidate) {
   std::mt19937_64 rng(5);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(3000, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(3000, rng);
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();
   // Tracking keeps only the last keyframe's points: the third keyframe sees the first one's

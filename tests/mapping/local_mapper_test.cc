@@ -33,9 +33,7 @@ MappingRun run_mapping(std::uint64_t seed, const LocalMapperConfig& config, bool
   // As after a map reset: ids keep counting (Map::clear), the new map's first is not 0.
   for (int i = 0; i < ids_used_before; ++i) run.map->next_keyframe_id();
   std::mt19937_64 rng(seed);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(2000, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(2000, rng);
   test::FakeTracker tracker(run.map, world, /*track_window=*/10);
   LocalMapper mapper(config, world.camera, run.map, world.vocabulary, run.database);
   for (int k = 0; k < 6; ++k) {
@@ -187,9 +185,7 @@ TEST(LocalMapper, RaisedAbortSkipsFusionBundleAdjustmentAndCulling) {
 // keyframe, lowest id, became the new map's first keyframe).
 TEST(LocalMapper, AKeyframeOfAMapResetMeanwhileIsNotPutBack) {
   std::mt19937_64 rng(31);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(2000, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(2000, rng);
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();
   test::FakeTracker tracker(map, world, /*track_window=*/10);
@@ -244,9 +240,7 @@ TEST(LocalMapper, RejectsInvalidConfig) {
   LocalMapperConfig config;
   config.triangulation.max_hamming = -1;
   std::mt19937_64 rng(1);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(200, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(200, rng);
   EXPECT_THROW(LocalMapper(config, world.camera, std::make_shared<map::Map>(), world.vocabulary,
                            std::make_shared<vocabulary::BowDatabase>()),
                ConfigError);

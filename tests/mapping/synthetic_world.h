@@ -98,6 +98,15 @@ class SyntheticWorld {
   std::shared_ptr<const vocabulary::Vocabulary> vocabulary;
   int bow_levels_up = 2;  // the test vocabulary has 3 levels: direct index at depth 1
 
+  /// The world most tests build maps in: n points on the walls of a 5 x 5 x 3 m room and a
+  /// vocabulary trained on them (room(), then train_vocabulary(), from the same generator).
+  static SyntheticWorld trained_room(std::size_t n, std::mt19937_64& rng) {
+    SyntheticWorld world;
+    world.points = room(n, 2.5, 1.5, rng);
+    world.train_vocabulary(rng);
+    return world;
+  }
+
   /// Points on the four walls, floor and ceiling of a box room centred at the origin.
   static std::vector<WorldPoint> room(std::size_t n, double half_size_m, double half_height_m,
                                       std::mt19937_64& rng) {

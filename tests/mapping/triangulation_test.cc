@@ -40,8 +40,7 @@ struct TwoKeyframes {
 TwoKeyframes make_two_keyframes(std::uint64_t seed) {
   TwoKeyframes s;
   std::mt19937_64 rng(seed);
-  s.world.points = SyntheticWorld::room(4000, 2.5, 1.5, rng);
-  s.world.train_vocabulary(rng);
+  s.world = SyntheticWorld::trained_room(4000, rng);
   test::ViewOptions options;
   options.no_depth_fraction = 0.3;
   const SE3 T1 = test::look_along(Vec3d(0.0, 0.0, 0.0), 0.0);

@@ -25,9 +25,7 @@ using loop::LoopResult;
 
 TEST(ThreadedLoopClosing, MappingAndLoopThreadsWithBackgroundGlobalBundleAdjustment) {
   std::mt19937_64 rng(51);
-  SyntheticWorld world;
-  world.points = SyntheticWorld::room(3000, 2.5, 1.5, rng);
-  world.train_vocabulary(rng);
+  const SyntheticWorld world = SyntheticWorld::trained_room(3000, rng);
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();
 
