@@ -110,18 +110,6 @@ void DenseMapper::finish() {
   if (octree_ && map_->big_change_index() != seen_big_change_) rebuild_octree();
 }
 
-namespace {
-
-// A stored keyframe's pose now. A culled keyframe's own pose stops moving when it is culled
-// (local BA, loop correction and global BA only move the map's keyframes); it is followed
-// through its parents as the camera trajectory is. Until 2026-11-26 inpainting used the frozen
-// pose and octree rebuilds skipped culled keyframes (found by review).
-SE3 current_T_w_c(const map::KeyFramePtr& keyframe) {
-  return tracking::resolve_relative_pose(SE3(), keyframe).inverse();
-}
-
-}  // namespace
-
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
   Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat(), cv::Mat()};
@@ -133,7 +121,10 @@ void DenseMapper::process(DenseKeyframe item) {
         stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes));
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
-      sources.push_back({current_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude, s.repaired});
+      // A culled source at its parent-resolved pose: its own pose froze when it was culled (until
+      // 2026-11-26 inpainting used that frozen pose, and rebuilds skipped culled keyframes).
+      sources.push_back(
+          {tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude, s.repaired});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
         item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
@@ -202,7 +193,8 @@ void DenseMapper::rebuild_octree() {
   seen_big_change_ = map_->big_change_index();
   octree_->clear();
   for (const Stored& s : stored_) {
-    octree_->integrate({s.keyframe->id(), current_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude});
+    octree_->integrate(
+        {s.keyframe->id(), tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude});
   }
   std::lock_guard lock(stats_mutex_);
   ++stats_.octree_rebuilds;

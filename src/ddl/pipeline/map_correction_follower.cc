@@ -4,17 +4,11 @@
 
 namespace ddl::pipeline {
 
-SE3 MapCorrectionFollower::anchor_pose() const {
-  // The identity pose relative to the anchor, resolved through culled keyframes' parents as
-  // the camera trajectory is.
-  return tracking::resolve_relative_pose(SE3(), anchor_).inverse();
-}
-
 void MapCorrectionFollower::anchor(const map::KeyFramePtr& reference) {
   anchor_ = reference;
   map_->read_consistent([&] {
     seen_big_change_ = map_->big_change_index();
-    T_w_anchor_ = anchor_pose();
+    T_w_anchor_ = tracking::resolved_T_w_c(anchor_);
   });
 }
 
@@ -23,7 +17,7 @@ std::optional<SE3> MapCorrectionFollower::correction() {
   SE3 T_w_anchor_now;
   map_->read_consistent([&] {
     seen_big_change_ = map_->big_change_index();
-    T_w_anchor_now = anchor_pose();
+    T_w_anchor_now = tracking::resolved_T_w_c(anchor_);
   });
   const SE3 T_new_old = T_w_anchor_now * T_w_anchor_.inverse();
   T_w_anchor_ = T_w_anchor_now;

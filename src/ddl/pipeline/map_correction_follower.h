@@ -41,12 +41,9 @@ class MapCorrectionFollower {
   void reset() { anchor_ = nullptr; }
 
  private:
-  /// The anchor's pose T_w_k now; a culled anchor is followed through its parents.
-  SE3 anchor_pose() const;
-
   std::shared_ptr<const map::Map> map_;
   map::KeyFramePtr anchor_;
-  SE3 T_w_anchor_;           // the anchor's pose when last read
+  SE3 T_w_anchor_;           // the anchor's pose when last read (tracking::resolved_T_w_c)
   int seen_big_change_ = 0;  // Map::big_change_index when last read
 };
 

@@ -15,6 +15,10 @@ SE3 resolve_relative_pose(const SE3& T_c_r, const map::KeyFramePtr& reference) {
   return T_c_k * kf->T_c_w();
 }
 
+SE3 resolved_T_w_c(const map::KeyFramePtr& keyframe) {
+  return resolve_relative_pose(SE3(), keyframe).inverse();
+}
+
 void TrajectoryRecorder::add_tracked(double timestamp_s, const SE3& T_c_w,
                                      const map::KeyFramePtr& reference) {
   std::lock_guard lock(mutex_);

@@ -44,4 +44,9 @@ class TrajectoryRecorder {
 /// spanning tree.
 SE3 resolve_relative_pose(const SE3& T_c_r, const map::KeyFramePtr& reference);
 
+/// A keyframe's pose T_w_c now. A culled keyframe's own pose stops moving when it is culled
+/// (local BA, loop correction and global BA only move the map's keyframes); it is followed
+/// through its parents, as the camera trajectory is.
+SE3 resolved_T_w_c(const map::KeyFramePtr& keyframe);
+
 }  // namespace ddl::tracking
