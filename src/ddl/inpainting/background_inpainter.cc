@@ -169,6 +169,114 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
   return cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & whole;
 }
 
+/// Source blocks of kCullBlock x kCullBlock pixels (aligned to the image origin) whose samples
+/// cannot land in the reach mask are skipped without projecting each pixel. A block's samples
+/// lie, in the source camera, inside the frustum through its pixel rectangle between the
+/// smallest and the largest depth measured in it; the frustum is convex with those 8 corners,
+/// and so is its image in the current camera when all corners lie in front of it, so the
+/// corners' bounding box there (1 px wider, for rounding) bounds every sample's target pixel. A
+/// block whose box holds no reach pixel is skipped: the splatted result is the same, sample for
+/// sample and in the same order.
+constexpr int kCullBlock = 16;
+
+/// Smallest and largest positive depth of each block (+inf and 0 where it has none), over the
+/// blocks that overlap `window` (the others are left without depth). Every measured depth
+/// counts, masked or not, so the range bounds the samples of either pass.
+struct BlockDepthRange {
+  int blocks_x = 0;
+  std::vector<float> z_min;
+  std::vector<float> z_max;
+};
+
+BlockDepthRange block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
+  BlockDepthRange range;
+  range.blocks_x = (depth_m.cols + kCullBlock - 1) / kCullBlock;
+  const int blocks_y = (depth_m.rows + kCullBlock - 1) / kCullBlock;
+  const std::size_t n = static_cast<std::size_t>(range.blocks_x) * blocks_y;
+  range.z_min.assign(n, std::numeric_limits<float>::infinity());
+  range.z_max.assign(n, 0.0f);
+  if (window.empty()) return range;
+  const int bx_begin = window.x / kCullBlock;
+  const int bx_end = (window.x + window.width - 1) / kCullBlock;  // inclusive
+  const int y_begin = window.y / kCullBlock * kCullBlock;
+  const int y_end =
+      std::min(((window.y + window.height - 1) / kCullBlock + 1) * kCullBlock, depth_m.rows);
+  for (int y = y_begin; y < y_end; ++y) {
+    const float* row = depth_m.ptr<float>(y);
+    const std::size_t base = static_cast<std::size_t>(y / kCullBlock) * range.blocks_x;
+    for (int bx = bx_begin; bx <= bx_end; ++bx) {
+      const int x1 = std::min((bx + 1) * kCullBlock, depth_m.cols);
+      float lo = range.z_min[base + bx];
+      float hi = range.z_max[base + bx];
+      for (int x = bx * kCullBlock; x < x1; ++x) {
+        const float z = row[x];
+        lo = std::min(lo, z > 0.0f ? z : std::numeric_limits<float>::infinity());
+        hi = std::max(hi, z);
+      }
+      range.z_min[base + bx] = lo;
+      range.z_max[base + bx] = hi;
+    }
+  }
+  return range;
+}
+
+/// Per block of the source: 1 = some sample of it may land in the reach mask.
+std::vector<std::uint8_t> active_blocks(const BlockDepthRange& range, const cv::Rect& window,
+                                        const SE3& T_cur_src, const camera::PinholeCamera& camera,
+                                        const cv::Mat& reach_sum, const cv::Rect& reach_box) {
+  std::vector<std::uint8_t> active(range.z_min.size(), 0);
+  if (window.empty()) return active;
+  const Mat3d R = T_cur_src.rotation();
+  const Vec3d t = T_cur_src.translation();
+  const int bx_end = (window.x + window.width - 1) / kCullBlock;
+  const int by_end = (window.y + window.height - 1) / kCullBlock;
+  for (int by = window.y / kCullBlock; by <= by_end; ++by) {
+    for (int bx = window.x / kCullBlock; bx <= bx_end; ++bx) {
+      const std::size_t i = static_cast<std::size_t>(by) * range.blocks_x + bx;
+      if (range.z_max[i] <= 0.0f) continue;  // no depth in the block
+      const int x0 = bx * kCullBlock;
+      const int y0 = by * kCullBlock;
+      double u_lo = std::numeric_limits<double>::infinity(), v_lo = u_lo;
+      double u_hi = -u_lo, v_hi = -u_lo;
+      bool in_front = true;
+      for (const float z : {range.z_min[i], range.z_max[i]}) {
+        for (const int x : {x0, x0 + kCullBlock - 1}) {
+          for (const int y : {y0, y0 + kCullBlock - 1}) {
+            const Vec3d p =
+                R * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
+            if (p.z() <= 0.05) in_front = false;
+            if (!in_front) break;
+            const double uc = camera.fx * p.x() / p.z() + camera.cx;
+            const double vc = camera.fy * p.y() / p.z() + camera.cy;
+            u_lo = std::min(u_lo, uc);
+            u_hi = std::max(u_hi, uc);
+            v_lo = std::min(v_lo, vc);
+            v_hi = std::max(v_hi, vc);
+          }
+        }
+      }
+      if (!in_front) {
+        active[i] = 1;
+        continue;
+      }
+      const double big = 1e6;  // keeps the casts defined for far-off projections
+      const cv::Rect box =
+          cv::Rect(cv::Point(static_cast<int>(std::floor(std::clamp(u_lo, -big, big))) - 1,
+                             static_cast<int>(std::floor(std::clamp(v_lo, -big, big))) - 1),
+                   cv::Point(static_cast<int>(std::ceil(std::clamp(u_hi, -big, big))) + 2,
+                             static_cast<int>(std::ceil(std::clamp(v_hi, -big, big))) + 2)) &
+          reach_box;
+      if (box.empty()) continue;
+      const int reached = reach_sum.at<int>(box.y + box.height, box.x + box.width) -
+                          reach_sum.at<int>(box.y, box.x + box.width) -
+                          reach_sum.at<int>(box.y + box.height, box.x) +
+                          reach_sum.at<int>(box.y, box.x);
+      active[i] = reached > 0 ? 1 : 0;
+    }
+  }
+  return active;
+}
+
 }  // namespace
 
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
@@ -201,6 +309,8 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   cv::Mat reach;
   cv::dilate(mask != 0, reach, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
   const cv::Rect reach_box = cv::boundingRect(reach);
+  cv::Mat reach_sum;  // integral image: reach pixels in any rectangle in O(1)
+  cv::integral(reach, reach_sum, CV_32S);
 
   const std::size_t count =
       std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
@@ -210,6 +320,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   // target pixels pass 0 left empty. Without observed_first one pass takes every pixel.
   const int passes = config.observed_first ? 2 : 1;
   cv::Mat locked;  // target pixels filled by observed samples (pass 1 leaves them alone)
+  std::vector<BlockDepthRange> depth_ranges(count);  // per source, computed when first needed
   for (int pass = 0; pass < passes; ++pass) {
     if (pass == 1) locked = out.filled != 0;
     for (std::size_t s = 0; s < count; ++s) {
@@ -224,12 +335,33 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       const int stride = config.source_stride_px;
       const int v_begin = (window.y + stride - 1) / stride * stride;
       const int u_begin = (window.x + stride - 1) / stride * stride;
+      const int blocks_x = (src.depth_m.cols + kCullBlock - 1) / kCullBlock;
+      std::vector<std::uint8_t> active;
+      if (config.skip_unreachable_blocks) {
+        // The window is the same in both passes.
+        if (depth_ranges[s].z_min.empty()) {
+          depth_ranges[s] = block_depth_range(src.depth_m, window);
+        }
+        active = active_blocks(depth_ranges[s], window, T_cur_src, camera, reach_sum, reach_box);
+      } else {
+        active.assign(
+            static_cast<std::size_t>(blocks_x) * ((src.depth_m.rows + kCullBlock - 1) / kCullBlock),
+            1);
+      }
       for (int v = v_begin; v < window.y + window.height; v += stride) {
         const float* drow = src.depth_m.ptr<float>(v);
         const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
         const std::uint8_t* xrow = src.exclude_mask.empty() ? nullptr : src.exclude_mask.ptr(v);
         const std::uint8_t* rrow = src.repaired_mask.empty() ? nullptr : src.repaired_mask.ptr(v);
+        const std::uint8_t* active_row =
+            active.data() + static_cast<std::size_t>(v / kCullBlock) * blocks_x;
         for (int u = u_begin; u < window.x + window.width; u += stride) {
+          if (active_row[u / kCullBlock] == 0) {
+            // Resume at the first sample of the next block (the loop adds the stride).
+            const int next = (u / kCullBlock + 1) * kCullBlock;
+            u = (next + stride - 1) / stride * stride - stride;
+            continue;
+          }
           const float z = drow[u];
           if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
           if (passes == 2) {

@@ -51,6 +51,10 @@ struct InpaintingConfig {
   /// (they saw farther along its ray, where they observed) is a piece of a moving object one
   /// source's mask missed, and is left unfilled. 0 = off.
   int see_through_votes = 2;
+  /// Skip source blocks of 16 x 16 pixels that cannot reach the mask (bounded by their depth
+  /// range), instead of projecting every pixel: the result is the same, sample for sample; false
+  /// is for checking that (tests/inpainting) and for timing it.
+  bool skip_unreachable_blocks = true;
 
   /// Throws ddl::ConfigError naming "dense.inpainting.<field>" (its place in the settings).
   void validate() const;
