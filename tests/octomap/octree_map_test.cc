@@ -113,6 +113,27 @@ TEST(OctreeMap, WallIsOccupiedAndSpaceInFrontIsFree) {
   EXPECT_GT(map.stats().occupied_leaves, 1000u);
 }
 
+// A voxel's colour from one scan is the mean of its points, whatever their order: a wall striped
+// by pixel columns (alternating red and blue, about ten pixels of each per 5 cm voxel at 3 m)
+// gives voxels of the mean colour. Averaging point by point weighted the last ones most.
+TEST(OctreeMap, AScanColoursAVoxelWithTheMeanOfItsPoints) {
+  OctreeConfig config;
+  config.pixel_stride = 1;
+  OctreeMap map(config, synthetic::tum3_camera());
+  KeyframeScan scan = wall_scan(false, 0);
+  for (int u = 0; u < scan.bgr.cols; ++u) {
+    scan.bgr.col(u).setTo(u % 2 == 0 ? cv::Scalar(0, 0, 200) : cv::Scalar(100, 0, 0));
+  }
+  map.integrate(scan);
+  for (const double x : {-0.4, 0.0, 0.25}) {
+    const auto* node = map.tree().search(x, 0.1, 3.0);
+    ASSERT_NE(node, nullptr);
+    const auto colour = node->getColor();
+    EXPECT_NEAR(colour.r, 100, 12) << "x = " << x;
+    EXPECT_NEAR(colour.b, 50, 6) << "x = " << x;
+  }
+}
+
 TEST(OctreeMap, RayCastingClearsAPersonWhoWalkedAway) {
   OctreeMap map(OctreeConfig{}, synthetic::tum3_camera());
   map.integrate(wall_scan(true, 0));

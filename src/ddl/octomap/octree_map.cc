@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/imgproc.hpp>
+#include <unordered_map>
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
@@ -87,10 +88,33 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
                                   static_cast<float>(t.z()));
   tree_->insertPointCloud(cloud, origin, config_.max_range_m, /*lazy_eval=*/true,
                           /*discretize=*/true);
-  tree_->updateInnerOccupancy();
+  // The scan's colour of a voxel is the mean of its points (one tree search per voxel, not per
+  // point); it is averaged into the voxel's colour so far. Colours go to the leaves (found by key,
+  // which needs no inner node); one update of the inner nodes afterwards sets their occupancy and
+  // colour.
+  struct ColourSum {
+    ::octomap::OcTreeKey key;
+    std::uint32_t b = 0, g = 0, r = 0, n = 0;
+  };
+  std::vector<ColourSum> sums;
+  std::unordered_map<::octomap::OcTreeKey, std::size_t, ::octomap::OcTreeKey::KeyHash> voxel;
+  voxel.reserve(colours.size());
   for (const Coloured& c : colours) {
-    tree_->averageNodeColor(static_cast<float>(c.p_w.x()), static_cast<float>(c.p_w.y()),
-                            static_cast<float>(c.p_w.z()), c.bgr[2], c.bgr[1], c.bgr[0]);
+    ::octomap::OcTreeKey key;
+    if (!tree_->coordToKeyChecked(c.p_w.x(), c.p_w.y(), c.p_w.z(), key)) continue;
+    const auto [it, added] = voxel.try_emplace(key, sums.size());
+    if (added) sums.push_back({key});
+    ColourSum& sum = sums[it->second];
+    sum.b += c.bgr[0];
+    sum.g += c.bgr[1];
+    sum.r += c.bgr[2];
+    ++sum.n;
+  }
+  auto mean = [](std::uint32_t total, std::uint32_t n) {
+    return static_cast<std::uint8_t>((total + n / 2) / n);
+  };
+  for (const ColourSum& sum : sums) {
+    tree_->averageNodeColor(sum.key, mean(sum.r, sum.n), mean(sum.g, sum.n), mean(sum.b, sum.n));
   }
   tree_->updateInnerOccupancy();
   ++scans_;
