@@ -332,6 +332,33 @@ TEST(Sequence, CompositeVoidCoversTheRealSeatedMan) {
 }
 #endif
 
+// meta.json's settings list what the sequence was made with: a composite (any preset given a
+// background sequence) lists the background and the people, not the room's camera path, camera,
+// posters or box, which it does not use (until stop 15 it listed them too).
+TEST(Sequence, ACompositesSettingsListOnlyWhatItUses) {
+  SequenceConfig composite = find_preset("syn_walking_xyz").config;
+  composite.background_dir = "/data/rgbd_dataset_freiburg1_rpy";
+  const nlohmann::json c = composite.to_json();
+  EXPECT_EQ(c["kind"], "composite");
+  EXPECT_EQ(c["background_dir"], "/data/rgbd_dataset_freiburg1_rpy");
+  EXPECT_EQ(c["background_camera"]["name"], "tum1");
+  for (const char* key : {"seed", "frames", "people_dir", "depth", "walker_distance_near_m",
+                          "walker_distance_far_m", "void_boxes_w"}) {
+    EXPECT_TRUE(c.contains(key)) << key;
+  }
+  for (const char* key :
+       {"motion", "loop_turns", "camera", "poster_images", "moving_object", "object_move_start_s",
+        "rgb_noise_sigma", "start_stamp_s", "depth_stamp_jitter_s", "people"}) {
+    EXPECT_FALSE(c.contains(key)) << key;
+  }
+  const nlohmann::json room = find_preset("syn_walking_xyz").config.to_json();
+  EXPECT_EQ(room["kind"], "room");
+  EXPECT_EQ(room["motion"], "xyz");
+  EXPECT_EQ(room["camera"]["name"], "tum3_synthetic");
+  EXPECT_FALSE(room.contains("background_dir"));
+  EXPECT_FALSE(room.contains("void_boxes_w"));
+}
+
 TEST(Sequence, PresetsMirrorTheBenchmarkRows) {
   std::set<std::string> names;
   for (const auto& p : presets()) {

@@ -140,49 +140,58 @@ nlohmann::json SequenceConfig::to_json() const {
                           {"depth_factor", c.depth_factor},
                           {"fps", c.fps}};
   };
-  nlohmann::json j{{"name", name},
-                   {"frames", frames},
-                   {"seed", seed},
-                   {"motion", to_string(motion)},
-                   {"loop_turns", loop_turns},
-                   {"people", to_string(people)},
-                   {"moving_object", moving_object},
-                   {"object_move_start_s", object_move_start_s},
-                   {"object_move_duration_s", object_move_duration_s},
-                   {"camera", cam(camera)},
-                   {"depth",
-                    {{"enabled", depth.enabled},
-                     {"min_range_m", depth.min_range_m},
-                     {"max_range_m", depth.max_range_m},
-                     {"max_incidence_deg", depth.max_incidence_deg},
-                     {"sigma_base_m", depth.sigma_base_m},
-                     {"sigma_quadratic", depth.sigma_quadratic},
-                     {"sigma_offset_m", depth.sigma_offset_m},
-                     {"sigma_angular", depth.sigma_angular},
-                     {"disparity_fb_px_m", depth.disparity_fb_px_m},
-                     {"disparity_subpixel", depth.disparity_subpixel},
-                     {"edge_jump_m", depth.edge_jump_m},
-                     {"edge_jump_relative", depth.edge_jump_relative},
-                     {"edge_extra_probability", depth.edge_extra_probability}}},
-                   {"rgb_noise_sigma", rgb_noise_sigma},
-                   {"start_stamp_s", start_stamp_s},
-                   {"depth_stamp_jitter_s", depth_stamp_jitter_s},
-                   {"people_dir", people_dir},
-                   {"poster_images", poster_images},
-                   {"background_dir", background_dir}};
+  const nlohmann::json depth_model{{"enabled", depth.enabled},
+                                   {"min_range_m", depth.min_range_m},
+                                   {"max_range_m", depth.max_range_m},
+                                   {"max_incidence_deg", depth.max_incidence_deg},
+                                   {"sigma_base_m", depth.sigma_base_m},
+                                   {"sigma_quadratic", depth.sigma_quadratic},
+                                   {"sigma_offset_m", depth.sigma_offset_m},
+                                   {"sigma_angular", depth.sigma_angular},
+                                   {"disparity_fb_px_m", depth.disparity_fb_px_m},
+                                   {"disparity_subpixel", depth.disparity_subpixel},
+                                   {"edge_jump_m", depth.edge_jump_m},
+                                   {"edge_jump_relative", depth.edge_jump_relative},
+                                   {"edge_extra_probability", depth.edge_extra_probability}};
   if (!background_dir.empty()) {
-    j["background_camera"] = cam(background_camera);
-    j["walker_distance_near_m"] = walker_distance_near_m;
-    j["walker_distance_far_m"] = walker_distance_far_m;
+    // A composite uses only these: the camera, motion, stamps and colour come from the real
+    // sequence, and the room's settings (camera path, posters, box) do not apply. Until stop 15
+    // a composite made from a room preset with --background listed that preset's settings too.
     nlohmann::json boxes = nlohmann::json::array();
     for (const WorldBox& b : void_boxes_w) {
       boxes.push_back({{"min_w", {b.min_w.x(), b.min_w.y(), b.min_w.z()}},
                        {"max_w", {b.max_w.x(), b.max_w.y(), b.max_w.z()}}});
     }
-    j["void_boxes_w"] = boxes;
-    j["void_grow_px"] = void_grow_px;
+    return nlohmann::json{{"name", name},
+                          {"kind", "composite"},
+                          {"frames", frames},
+                          {"seed", seed},
+                          {"background_dir", background_dir},
+                          {"background_camera", cam(background_camera)},
+                          {"people_dir", people_dir},
+                          {"walker_distance_near_m", walker_distance_near_m},
+                          {"walker_distance_far_m", walker_distance_far_m},
+                          {"depth", depth_model},  // the people's depth
+                          {"void_boxes_w", boxes},
+                          {"void_grow_px", void_grow_px}};
   }
-  return j;
+  return nlohmann::json{{"name", name},
+                        {"kind", "room"},
+                        {"frames", frames},
+                        {"seed", seed},
+                        {"motion", to_string(motion)},
+                        {"loop_turns", loop_turns},
+                        {"people", to_string(people)},
+                        {"moving_object", moving_object},
+                        {"object_move_start_s", object_move_start_s},
+                        {"object_move_duration_s", object_move_duration_s},
+                        {"camera", cam(camera)},
+                        {"depth", depth_model},
+                        {"rgb_noise_sigma", rgb_noise_sigma},
+                        {"start_stamp_s", start_stamp_s},
+                        {"depth_stamp_jitter_s", depth_stamp_jitter_s},
+                        {"people_dir", people_dir},
+                        {"poster_images", poster_images}};
 }
 
 const std::vector<Preset>& presets() {
