@@ -114,8 +114,9 @@ TEST(OctreeMap, WallIsOccupiedAndSpaceInFrontIsFree) {
 }
 
 // A voxel's colour from one scan is the mean of its points, whatever their order: a wall striped
-// by pixel columns (alternating red and blue, about ten pixels of each per 5 cm voxel at 3 m)
-// gives voxels of the mean colour. Averaging point by point weighted the last ones most.
+// by pixel columns (alternating red and blue; a 5 cm voxel at 3 m spans 9 columns, 4 or 5 of each)
+// gives voxels of the mean colour (r 89 or 111, b 56 or 44). Averaging point by point, as before
+// stop 15, weighted the last points most: r about 67 or 133, b about 33 or 67.
 TEST(OctreeMap, AScanColoursAVoxelWithTheMeanOfItsPoints) {
   OctreeConfig config;
   config.pixel_stride = 1;
@@ -129,8 +130,8 @@ TEST(OctreeMap, AScanColoursAVoxelWithTheMeanOfItsPoints) {
     const auto* node = map.tree().search(x, 0.1, 3.0);
     ASSERT_NE(node, nullptr);
     const auto colour = node->getColor();
-    EXPECT_NEAR(colour.r, 100, 12) << "x = " << x;
-    EXPECT_NEAR(colour.b, 50, 6) << "x = " << x;
+    EXPECT_NEAR(colour.r, 100, 15) << "x = " << x;
+    EXPECT_NEAR(colour.b, 50, 10) << "x = " << x;
   }
 }
 

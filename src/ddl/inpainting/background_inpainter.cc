@@ -179,8 +179,8 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
 /// sample and in the same order.
 constexpr int kCullBlock = 16;
 
-/// Smallest and largest positive depth of each block (+inf and 0 where it has none), over the
-/// blocks that overlap `window` (the others are left without depth). Every measured depth
+/// Smallest and largest finite positive depth of each block (+inf and 0 where it has none), over
+/// the blocks that overlap `window` (the others are left without depth). Every measured depth
 /// counts, masked or not, so the range bounds the samples of either pass.
 struct BlockDepthRange {
   int blocks_x = 0;
@@ -209,9 +209,12 @@ BlockDepthRange block_depth_range(const cv::Mat& depth_m, const cv::Rect& window
       float lo = range.z_min[base + bx];
       float hi = range.z_max[base + bx];
       for (int x = bx * kCullBlock; x < x1; ++x) {
+        // Finite positive depths only (an infinite one would make the corners NaN, which min
+        // and max skip); samples of any other depth are rejected by the splat loop anyway.
         const float z = row[x];
-        lo = std::min(lo, z > 0.0f ? z : std::numeric_limits<float>::infinity());
-        hi = std::max(hi, z);
+        const bool measured = z > 0.0f && z < std::numeric_limits<float>::infinity();
+        lo = std::min(lo, measured ? z : std::numeric_limits<float>::infinity());
+        hi = std::max(hi, measured ? z : 0.0f);
       }
       range.z_min[base + bx] = lo;
       range.z_max[base + bx] = hi;

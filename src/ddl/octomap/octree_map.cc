@@ -101,7 +101,10 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
   voxel.reserve(colours.size());
   for (const Coloured& c : colours) {
     ::octomap::OcTreeKey key;
-    if (!tree_->coordToKeyChecked(c.p_w.x(), c.p_w.y(), c.p_w.z(), key)) continue;
+    // The voxel of the point as inserted: the cloud holds floats.
+    const ::octomap::point3d p(static_cast<float>(c.p_w.x()), static_cast<float>(c.p_w.y()),
+                               static_cast<float>(c.p_w.z()));
+    if (!tree_->coordToKeyChecked(p, key)) continue;
     const auto [it, added] = voxel.try_emplace(key, sums.size());
     if (added) sums.push_back({key});
     ColourSum& sum = sums[it->second];
