@@ -261,6 +261,48 @@ TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
   EXPECT_EQ(cv::countNonZero(no_depth.unfilled), 100);
 }
 
+// extra_keyframes: older keyframes fill only what the newest num_keyframes left empty. The newest
+// keyframe saw the wall behind the person only in the right half of the image (its left half is
+// excluded), an older one saw all of it, in other colours (tinted) and 15 cm nearer: the right half
+// keeps the newest's colours, the left half gets the older's, and without the older one it stays
+// empty.
+TEST(Inpainting, ExtraKeyframesFillOnlyWhatTheNewestLeftEmpty) {
+  const auto cam = synthetic::tum3_camera();
+  const SE3 T_w_cur(Mat3d::Identity(), Vec3d(0.0, 0.05, 0.1));
+  const SE3 T_w_kf(Mat3d::Identity(), Vec3d(0.02, 0.0, 0.0));
+  const View cur = render(cam, T_w_cur, true);
+  const View truth = render(cam, T_w_cur, false);
+  const View newest = render(cam, T_w_kf, false);
+  View older = render(cam, T_w_kf, false);
+  older.bgr += cv::Scalar(40, 40, 40);
+  older.depth -= 0.15;  // nearer by more than the tolerance: it would win the z-buffer if let in
+  cv::Mat newest_excluded = cv::Mat::zeros(newest.depth.size(), CV_8UC1);
+  newest_excluded.colRange(0, cam.width / 2).setTo(255);
+  const cv::Mat mask = cur.depth < 2.0f;
+  const std::vector<SourceView> sources = {{T_w_kf, newest.bgr, newest.depth, newest_excluded, {}},
+                                           {T_w_kf, older.bgr, older.depth, {}, {}}};
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  config.see_through_votes = 0;
+  config.num_keyframes = 1;
+  const auto newest_only =
+      inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_LT(newest_only.filled_pixels, 0.6 * cv::countNonZero(mask));
+  config.extra_keyframes = 1;
+  const auto both = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_GT(both.filled_pixels, 0.98 * cv::countNonZero(mask));
+  // Mean colour difference to the true background on each side (well inside the halves).
+  auto mean_diff = [&](int u0, int u1) {
+    cv::Mat diff;
+    cv::absdiff(both.bgr.colRange(u0, u1), truth.bgr.colRange(u0, u1), diff);
+    const cv::Mat where = both.filled.colRange(u0, u1);
+    const cv::Scalar m = cv::mean(diff, where);
+    return (m[0] + m[1] + m[2]) / 3.0;
+  };
+  EXPECT_LT(mean_diff(cam.width / 2 + 20, cam.width), 3.0);  // the newest's colours
+  EXPECT_NEAR(mean_diff(0, cam.width / 2 - 20), 40.0, 5.0);  // the older's (tinted)
+}
+
 // Skipping the source blocks that cannot reach the mask changes nothing: on a room of the
 // generator (furniture, so blocks straddle depth edges) seen from a half-sphere path whose views
 // differ by up to tens of degrees, with repaired source pixels (the second pass), both ways give

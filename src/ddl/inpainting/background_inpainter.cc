@@ -16,6 +16,9 @@ void InpaintingConfig::validate() const {
     throw ConfigError::for_key(std::string("dense.inpainting.") + key, what);
   };
   if (num_keyframes < 1 || num_keyframes > 255) fail("num_keyframes", "must be in 1..255");
+  if (extra_keyframes < 0 || num_keyframes + extra_keyframes > 255) {
+    fail("extra_keyframes", "must be >= 0, with num_keyframes + extra_keyframes <= 255");
+  }
   if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");
   if (!(depth_tolerance_m >= 0)) fail("depth_tolerance_m", "must be >= 0");
   if (!(depth_tolerance_rel >= 0 && depth_tolerance_rel < 1))
@@ -308,27 +311,60 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   const float tol_rel = static_cast<float>(config.depth_tolerance_rel);
   const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
   // Most source pixels land outside the mask: reject them with one lookup in the mask grown by
-  // the splat radius (and its bounding box) instead of testing every splat position.
+  // the splat radius (and its bounding box) instead of testing every splat position. Passes after
+  // the first reach only the masked pixels still empty.
   cv::Mat reach;
-  cv::dilate(mask != 0, reach, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
-  const cv::Rect reach_box = cv::boundingRect(reach);
+  cv::Rect reach_box;
   cv::Mat reach_sum;  // integral image: reach pixels in any rectangle in O(1)
-  cv::integral(reach, reach_sum, CV_32S);
+  auto set_reach = [&](const cv::Mat& open) {
+    cv::dilate(open, reach, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
+    reach_box = cv::boundingRect(reach);
+    cv::integral(reach, reach_sum, CV_32S);
+  };
 
-  const std::size_t count =
+  const std::size_t newest =
       std::min<std::size_t>(sources.size(), static_cast<std::size_t>(config.num_keyframes));
+  const std::size_t count = std::min<std::size_t>(
+      sources.size(), static_cast<std::size_t>(config.num_keyframes + config.extra_keyframes));
   // Which source won each pixel (for the colour resampling below).
   cv::Mat winner(mask.size(), CV_8UC1, cv::Scalar(0));
-  // Pass 0: observed source pixels; pass 1 (observed_first): repaired source pixels, only into
-  // target pixels pass 0 left empty. Without observed_first one pass takes every pixel.
-  const int passes = config.observed_first ? 2 : 1;
-  cv::Mat locked;  // target pixels filled by observed samples (pass 1 leaves them alone)
-  std::vector<BlockDepthRange> depth_ranges(count);  // per source, computed when first needed
-  for (int pass = 0; pass < passes; ++pass) {
-    if (pass == 1) locked = out.filled != 0;
-    for (std::size_t s = 0; s < count; ++s) {
+  // The passes, in order; each after the first only fills target pixels the earlier ones left
+  // empty (`locked`). The newest num_keyframes sources first: with observed_first their observed
+  // pixels, then their repaired ones; the extra_keyframes older sources after them, likewise.
+  enum class Take { kAny, kObserved, kRepaired };
+  struct Pass {
+    std::size_t begin, end;
+    Take take;
+  };
+  std::vector<Pass> passes;
+  if (config.observed_first) {
+    passes = {{0, newest, Take::kObserved},
+              {0, newest, Take::kRepaired},
+              {newest, count, Take::kObserved},
+              {newest, count, Take::kRepaired}};
+  } else {
+    passes = {{0, newest, Take::kAny}, {newest, count, Take::kAny}};
+  }
+  cv::Mat locked;  // target pixels filled by an earlier pass
+  struct CachedRange {
+    cv::Rect window;
+    BlockDepthRange range;
+  };
+  std::vector<CachedRange> depth_ranges(count);  // per source, computed when first needed
+  for (std::size_t pass = 0; pass < passes.size(); ++pass) {
+    const Take take = passes[pass].take;
+    if (passes[pass].begin >= passes[pass].end) continue;
+    if (pass == 0) {
+      set_reach(mask != 0);
+    } else {
+      locked = out.filled != 0;
+      const cv::Mat open = (mask != 0) & ~locked;
+      if (cv::countNonZero(open) == 0) break;  // nothing left to fill
+      set_reach(open);
+    }
+    for (std::size_t s = passes[pass].begin; s < passes[pass].end; ++s) {
       const SourceView& src = sources[s];
-      if (pass == 1 && src.repaired_mask.empty()) continue;
+      if (take == Take::kRepaired && src.repaired_mask.empty()) continue;
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
       const Vec3d t = T_cur_src.translation();
@@ -341,11 +377,12 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       const int blocks_x = (src.depth_m.cols + kCullBlock - 1) / kCullBlock;
       std::vector<std::uint8_t> active;
       if (config.skip_unreachable_blocks) {
-        // The window is the same in both passes.
-        if (depth_ranges[s].z_min.empty()) {
-          depth_ranges[s] = block_depth_range(src.depth_m, window);
+        // A later pass of the same source reaches fewer pixels: its window lies inside.
+        CachedRange& cached = depth_ranges[s];
+        if (cached.range.z_min.empty() || (cached.window & window) != window) {
+          cached = {window, block_depth_range(src.depth_m, window)};
         }
-        active = active_blocks(depth_ranges[s], window, T_cur_src, camera, reach_sum, reach_box);
+        active = active_blocks(cached.range, window, T_cur_src, camera, reach_sum, reach_box);
       } else {
         active.assign(
             static_cast<std::size_t>(blocks_x) * ((src.depth_m.rows + kCullBlock - 1) / kCullBlock),
@@ -367,9 +404,9 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
           }
           const float z = drow[u];
           if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
-          if (passes == 2) {
+          if (take != Take::kAny) {
             const bool repaired = rrow != nullptr && rrow[u] != 0;
-            if (repaired != (pass == 1)) continue;
+            if (repaired != (take == Take::kRepaired)) continue;
           }
           const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
           const Vec3d p = R * p_src + t;
@@ -388,7 +425,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
             const std::uint8_t* mrow = mask.ptr(y);
             const float* drow_cur = depth_m.ptr<float>(y);
             float* zrow = zbuf.ptr<float>(y);
-            const std::uint8_t* lrow = pass == 1 ? locked.ptr(y) : nullptr;
+            const std::uint8_t* lrow = pass > 0 ? locked.ptr(y) : nullptr;
             for (int du = -r; du <= r; ++du) {
               const int x = iu + du;
               if (x < 0 || x >= w || mrow[x] == 0) continue;

@@ -27,7 +27,12 @@
 namespace ddl::inpainting {
 
 struct InpaintingConfig {
-  int num_keyframes = 15;             // last keyframes projected (paper: 15)
+  int num_keyframes = 15;  // last keyframes projected (paper: 15)
+  /// Older keyframes (before the last num_keyframes) projected afterwards, only into the pixels
+  /// the last num_keyframes left empty: what the camera saw from elsewhere (a half-sphere path)
+  /// fills holes, while recent content keeps priority where it has any. 0 = the paper's
+  /// setting; 25 fills 87% instead of 68% of syn_walking_halfsphere's dynamic pixels.
+  int extra_keyframes = 25;
   int splat_radius_px = 1;            // each source pixel covers (2r+1)^2 target pixels (0 = one)
   double depth_tolerance_m = 0.02;    // z-buffer: nearer by more than this wins
   double depth_tolerance_rel = 0.03;  // tolerance grows by this fraction of the depth (noise)
@@ -82,7 +87,7 @@ struct InpaintingResult {
 };
 
 /// Repairs the pixels of `mask` (non-zero) in the current frame (pose T_c_w) from `sources`
-/// (ordered newest first; at most config.num_keyframes are used).
+/// (ordered newest first; at most config.num_keyframes + config.extra_keyframes are used).
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
                          const SE3& T_c_w, const std::vector<SourceView>& sources,
                          const camera::PinholeCamera& camera, const InpaintingConfig& config);

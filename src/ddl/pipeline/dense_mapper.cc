@@ -118,7 +118,8 @@ void DenseMapper::process(DenseKeyframe item) {
   if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
     std::vector<inpainting::SourceView> sources;
     const std::size_t n = std::min<std::size_t>(
-        stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes));
+        stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes +
+                                                 config_.inpainting.extra_keyframes));
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
       // A culled source at its parent-resolved pose: its own pose froze when it was culled (until
