@@ -1,10 +1,11 @@
 // Micro-benchmark of the background inpainting (docs/dense.md):
 //   ddl_bench_inpainting --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The scene is syn_walking_xyz rendered in process (silhouette people, no files needed): the
-// keyframe to repair and the 15 keyframes before it, every 6th frame, at their true poses, each
-// source with its true dynamic mask grown by 12 px as the pixels not to use (as the dense stage
-// gives them), the repaired keyframe with its true dynamic mask grown by 4 px. Arguments: the
-// frame of the repaired keyframe, and dense.inpainting.skip_unreachable_blocks (1 = default).
+// keyframe to repair and the 40 keyframes before it (15 + 25 extra), every 6th frame, at their true
+// poses, each source with its true dynamic mask grown by 12 px as the pixels not to use and its
+// depth blocks computed beforehand (as the dense stage gives them), the repaired keyframe with its
+// true dynamic mask grown by 4 px. Arguments: the frame of the repaired keyframe,
+// dense.inpainting.skip_unreachable_blocks (1 = default) and dense.inpainting.extra_keyframes.
 
 #include <benchmark/benchmark.h>
 
@@ -48,11 +49,14 @@ void BM_Inpaint(benchmark::State& state) {
   const auto target_index = static_cast<std::size_t>(state.range(0));
   InpaintingConfig config;
   config.skip_unreachable_blocks = state.range(1) != 0;
+  config.extra_keyframes = static_cast<int>(state.range(2));
   const Keyframe target = render(*source, target_index);
   std::vector<SourceView> sources;  // newest first
-  for (int k = 1; k <= config.num_keyframes; ++k) {
+  for (int k = 1; k <= config.num_keyframes + config.extra_keyframes; ++k) {
     const Keyframe kf = render(*source, target_index - static_cast<std::size_t>(6 * k));
-    sources.push_back({kf.T_w_c, kf.bgr, kf.depth_m, grown(kf.dynamic_mask, 12), cv::Mat()});
+    sources.push_back({kf.T_w_c, kf.bgr, kf.depth_m, grown(kf.dynamic_mask, 12), cv::Mat(),
+                       std::make_shared<const ddl::inpainting::DepthBlocks>(
+                           ddl::inpainting::depth_blocks(kf.depth_m))});
   }
   const cv::Mat mask = grown(target.dynamic_mask, 4);
   int filled = 0;
@@ -67,10 +71,11 @@ void BM_Inpaint(benchmark::State& state) {
   state.counters["filled_px"] = filled;
 }
 BENCHMARK(BM_Inpaint)
-    ->Args({300, 1})
-    ->Args({300, 0})
-    ->Args({500, 1})
-    ->Args({500, 0})
+    ->Args({300, 1, 25})
+    ->Args({300, 1, 0})
+    ->Args({300, 0, 25})
+    ->Args({500, 1, 25})
+    ->Args({500, 1, 0})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -285,6 +285,7 @@ TEST(Inpainting, ExtraKeyframesFillOnlyWhatTheNewestLeftEmpty) {
   config.image_fill_small_holes = false;
   config.see_through_votes = 0;
   config.num_keyframes = 1;
+  config.extra_keyframes = 0;
   const auto newest_only =
       inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_LT(newest_only.filled_pixels, 0.6 * cv::countNonZero(mask));
@@ -353,6 +354,13 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     config.source_stride_px = stride;
     const auto skipped = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
                                  target.T_w_c.inverse(), cropped, cam, config);
+    // The same with each source's depth blocks computed beforehand (as the dense stage keeps them).
+    std::vector<SourceView> with_blocks = cropped;
+    for (SourceView& v : with_blocks) {
+      v.blocks = std::make_shared<const DepthBlocks>(depth_blocks(v.depth_m));
+    }
+    const auto kept = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
+                              target.T_w_c.inverse(), with_blocks, cam, config);
     config.skip_unreachable_blocks = false;
     const auto every = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
                                target.T_w_c.inverse(), cropped, cam, config);
@@ -362,6 +370,9 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     EXPECT_EQ(differing(skipped.depth_m, every.depth_m), 0);
     EXPECT_EQ(differing(skipped.filled, every.filled), 0);
     EXPECT_EQ(differing(skipped.unfilled, every.unfilled), 0);
+    EXPECT_EQ(differing(kept.bgr, every.bgr), 0);
+    EXPECT_EQ(differing(kept.depth_m, every.depth_m), 0);
+    EXPECT_EQ(differing(kept.filled, every.filled), 0);
   }
 }
 

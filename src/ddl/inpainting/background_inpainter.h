@@ -18,6 +18,7 @@
 // so a repair's mistakes do not spread to later repairs where an observation is available.
 // Thread-safety: pure functions of their inputs.
 
+#include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -30,9 +31,10 @@ struct InpaintingConfig {
   int num_keyframes = 15;  // last keyframes projected (paper: 15)
   /// Older keyframes (before the last num_keyframes) projected afterwards, only into the pixels
   /// the last num_keyframes left empty: what the camera saw from elsewhere (a half-sphere path)
-  /// fills holes, while recent content keeps priority where it has any. 0 = the paper's
-  /// setting; 25 fills 87% instead of 68% of syn_walking_halfsphere's dynamic pixels.
-  int extra_keyframes = 25;
+  /// fills holes, while recent content keeps priority where it has any. 0 = the paper's setting
+  /// (default: 25 fills 87% instead of 68% of syn_walking_halfsphere's dynamic pixels, but costs
+  /// about 6% of the end-to-end frame rate; docs/dense.md).
+  int extra_keyframes = 0;
   int splat_radius_px = 1;            // each source pixel covers (2r+1)^2 target pixels (0 = one)
   double depth_tolerance_m = 0.02;    // z-buffer: nearer by more than this wins
   double depth_tolerance_rel = 0.03;  // tolerance grows by this fraction of the depth (noise)
@@ -65,6 +67,20 @@ struct InpaintingConfig {
   void validate() const;
 };
 
+/// Smallest and largest finite positive depth of each kBlock x kBlock block of a depth image
+/// (+inf and 0 where it has none, or where it was not computed). inpaint() skips the source blocks
+/// that cannot reach the mask with it; a caller that keeps its sources computes it once per source.
+struct DepthBlocks {
+  static constexpr int kBlock = 16;
+  int blocks_x = 0;
+  int blocks_y = 0;
+  std::vector<float> z_min;
+  std::vector<float> z_max;
+};
+
+/// DepthBlocks of the whole image.
+DepthBlocks depth_blocks(const cv::Mat& depth_m);
+
 /// A keyframe as a source of background: its pose, images and the pixels not to use.
 struct SourceView {
   SE3 T_w_c;
@@ -74,6 +90,8 @@ struct SourceView {
       exclude_mask;  // CV_8UC1 non-zero = do not use (dynamic pixels left unfilled); may be empty
   /// CV_8UC1 non-zero = this keyframe's own repair filled the pixel (not observed); may be empty.
   cv::Mat repaired_mask;
+  /// depth_blocks(depth_m), when the caller keeps it; otherwise inpaint() computes what it needs.
+  std::shared_ptr<const DepthBlocks> blocks;
 };
 
 struct InpaintingResult {

@@ -124,8 +124,8 @@ void DenseMapper::process(DenseKeyframe item) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
       // A culled source at its parent-resolved pose: its own pose froze when it was culled (until
       // 2026-11-26 inpainting used that frozen pose, and rebuilds skipped culled keyframes).
-      sources.push_back(
-          {tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude, s.repaired});
+      sources.push_back({tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude,
+                         s.repaired, s.blocks});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
         item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
@@ -153,6 +153,11 @@ void DenseMapper::process(DenseKeyframe item) {
     stored.exclude = exclude;
   } else {
     stored.exclude = stored.unfilled;
+  }
+  if (config_.inpainting_enabled && config_.inpainting.skip_unreachable_blocks) {
+    // Computed once here instead of in each of the next 40 repairs that use this keyframe.
+    stored.blocks =
+        std::make_shared<const inpainting::DepthBlocks>(inpainting::depth_blocks(stored.depth_m));
   }
   timings_.record("inpainting", watch.elapsed_ms());
 

@@ -93,6 +93,7 @@ class DenseMapper {
     cv::Mat unfilled;  // still-dynamic pixels
     cv::Mat exclude;   // unfilled and the border band around the mask: not a source, not mapped
     cv::Mat repaired;  // pixels its own repair filled (a source after observed pixels)
+    std::shared_ptr<const inpainting::DepthBlocks> blocks;  // of depth_m, for later repairs
   };
   struct ResetRequest {};
   using Item = std::variant<DenseKeyframe, ResetRequest>;
