@@ -1,10 +1,10 @@
 // Micro-benchmark of the background inpainting (docs/dense.md):
 //   ddl_bench_inpainting --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The scene is syn_walking_xyz rendered in process (silhouette people, no files needed): the
-// keyframe to repair and the 40 keyframes before it (15 + 25 extra), every 6th frame, at their true
-// poses, each source with its true dynamic mask grown by 12 px as the pixels not to use and its
-// depth blocks computed beforehand (as the dense stage gives them), the repaired keyframe with its
-// true dynamic mask grown by 4 px. Arguments: the frame of the repaired keyframe,
+// keyframe to repair and the 15 + extra_keyframes keyframes before it, every 6th frame, at their
+// true poses, each source with its true dynamic mask grown by 12 px as the pixels not to use and
+// its depth blocks computed beforehand (as the dense stage gives them), the repaired keyframe with
+// its true dynamic mask grown by 4 px. Arguments: the frame of the repaired keyframe,
 // dense.inpainting.skip_unreachable_blocks (1 = default) and dense.inpainting.extra_keyframes.
 
 #include <benchmark/benchmark.h>

@@ -16,7 +16,7 @@ void InpaintingConfig::validate() const {
     throw ConfigError::for_key(std::string("dense.inpainting.") + key, what);
   };
   if (num_keyframes < 1 || num_keyframes > 255) fail("num_keyframes", "must be in 1..255");
-  if (extra_keyframes < 0 || num_keyframes + extra_keyframes > 255) {
+  if (extra_keyframes < 0 || extra_keyframes > 255 - num_keyframes) {
     fail("extra_keyframes", "must be >= 0, with num_keyframes + extra_keyframes <= 255");
   }
   if (splat_radius_px < 0 || splat_radius_px > 4) fail("splat_radius_px", "must be in 0..4");
@@ -183,7 +183,7 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
 constexpr int kCullBlock = DepthBlocks::kBlock;
 
 /// DepthBlocks over the blocks that overlap `window` (the others are left without depth). Every
-/// measured depth counts, masked or not, so the range bounds the samples of either pass.
+/// measured depth counts, masked or not, so the range bounds the samples of every pass.
 DepthBlocks block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
   DepthBlocks range;
   range.blocks_x = (depth_m.cols + kCullBlock - 1) / kCullBlock;
@@ -276,6 +276,15 @@ std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect
   return active;
 }
 
+/// Whether `blocks` has the layout of depth_blocks(depth_m) (it cannot tell the depths apart).
+bool matches(const DepthBlocks& blocks, const cv::Mat& depth_m) {
+  const int bx = (depth_m.cols + kCullBlock - 1) / kCullBlock;
+  const int by = (depth_m.rows + kCullBlock - 1) / kCullBlock;
+  const std::size_t n = static_cast<std::size_t>(bx) * static_cast<std::size_t>(by);
+  return blocks.blocks_x == bx && blocks.blocks_y == by && blocks.z_min.size() == n &&
+         blocks.z_max.size() == n;
+}
+
 }  // namespace
 
 DepthBlocks depth_blocks(const cv::Mat& depth_m) {
@@ -363,9 +372,8 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     for (std::size_t s = passes[pass].begin; s < passes[pass].end; ++s) {
       const SourceView& src = sources[s];
       if (take == Take::kRepaired && src.repaired_mask.empty()) continue;
-      if (src.blocks && (src.blocks->blocks_x * kCullBlock < src.depth_m.cols ||
-                         src.blocks->blocks_y * kCullBlock < src.depth_m.rows)) {
-        throw Error("inpaint: a source's depth blocks do not cover its depth image");
+      if (src.blocks && !matches(*src.blocks, src.depth_m)) {
+        throw Error("inpaint: a source's depth blocks are not those of its depth image's size");
       }
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
@@ -456,8 +464,7 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     }
   }
   if (config.see_through_votes > 0) {
-    reject_seen_through(out, zbuf, winner, bgr, depth_m, T_c_w, sources,
-                        getenv("DDL_V15") ? newest : count, camera, config);
+    reject_seen_through(out, zbuf, winner, bgr, depth_m, T_c_w, sources, count, camera, config);
   }
   out.filled = out.filled != 0;
   out.filled_pixels = cv::countNonZero(out.filled);

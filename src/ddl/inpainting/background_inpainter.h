@@ -1,22 +1,22 @@
 #pragma once
 // Background inpainting from previous keyframes (DDL-SLAM section III-E): the pixels of the
 // current frame hidden by dynamic objects are filled with what the last N keyframes (default 15)
-// saw there. Every static pixel of a keyframe (outside its own dynamic mask, with depth) is
-// back-projected with its depth, moved into the current camera with the optimized poses and
-// splatted into the current frame; a z-buffer keeps the nearest surface, so the result is what
-// the camera would see if the dynamic objects were not there. Keyframes are visited newest first
-// and their already repaired content is used (each keyframe stores its repaired images), so the
-// background spreads over time. Pixels no keyframe saw remain in the `unfilled` mask; an optional
-// image-based fill (OpenCV Telea inpainting) closes holes smaller than `max_hole_area_px`.
-// Two checks keep the projected content to the hidden background: samples within the depth
-// tolerance (absolute + relative, as Kinect noise and disparity steps grow with depth) count as
-// one surface, so the newest keyframe's centre sample wins over noisy older ones instead of
-// a mosaic of sources; and a sample nearer than what the current frame measures at that pixel
-// (by more than the tolerance) is rejected: the current ray is free up to its depth, so such a
-// sample is content that is gone (a moving object a source keyframe's mask missed). With
-// observed_first, what the keyframes observed is splatted before what they repaired themselves,
-// so a repair's mistakes do not spread to later repairs where an observation is available.
-// Thread-safety: pure functions of their inputs.
+// saw there (and, optionally, what older keyframes saw where those left holes). Every static pixel
+// of a keyframe (outside its own dynamic mask, with depth) is back-projected with its depth, moved
+// into the current camera with the optimized poses and splatted into the current frame; a z-buffer
+// keeps the nearest surface, so the result is what the camera would see if the dynamic objects were
+// not there. Keyframes are visited newest first and their already repaired content is used (each
+// keyframe stores its repaired images), so the background spreads over time. Pixels no keyframe saw
+// remain in the `unfilled` mask; an optional image-based fill (OpenCV Telea inpainting) closes
+// holes smaller than `max_hole_area_px`. Two checks keep the projected content to the hidden
+// background: samples within the depth tolerance (absolute + relative, as Kinect noise and
+// disparity steps grow with depth) count as one surface, so the newest keyframe's centre sample
+// wins over noisy older ones instead of a mosaic of sources; and a sample nearer than what the
+// current frame measures at that pixel (by more than the tolerance) is rejected: the current ray is
+// free up to its depth, so such a sample is content that is gone (a moving object a source
+// keyframe's mask missed). With observed_first, what the keyframes observed is splatted before what
+// they repaired themselves, so a repair's mistakes do not spread to later repairs where an
+// observation is available. Thread-safety: pure functions of their inputs.
 
 #include <memory>
 #include <opencv2/core.hpp>
@@ -30,10 +30,10 @@ namespace ddl::inpainting {
 struct InpaintingConfig {
   int num_keyframes = 15;  // last keyframes projected (paper: 15)
   /// Older keyframes (before the last num_keyframes) projected afterwards, only into the pixels
-  /// the last num_keyframes left empty: what the camera saw from elsewhere (a half-sphere path)
-  /// fills holes, while recent content keeps priority where it has any. 0 = the paper's setting
-  /// (default: 25 fills 87% instead of 68% of syn_walking_halfsphere's dynamic pixels, but costs
-  /// about 6% of the end-to-end frame rate; docs/dense.md).
+  /// the last num_keyframes left empty (after their repaired pixels too), and voting in the
+  /// see-through check: what the camera saw from elsewhere fills holes, while recent content
+  /// keeps priority. 0 = the paper's setting. 25 fills 87% instead of 68% of
+  /// syn_walking_halfsphere's dynamic pixels but costs about 6% of the frame rate (docs/dense.md).
   int extra_keyframes = 0;
   int splat_radius_px = 1;            // each source pixel covers (2r+1)^2 target pixels (0 = one)
   double depth_tolerance_m = 0.02;    // z-buffer: nearer by more than this wins

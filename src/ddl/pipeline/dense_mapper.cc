@@ -155,7 +155,7 @@ void DenseMapper::process(DenseKeyframe item) {
     stored.exclude = stored.unfilled;
   }
   if (config_.inpainting_enabled && config_.inpainting.skip_unreachable_blocks) {
-    // Computed once here instead of in each of the next 40 repairs that use this keyframe.
+    // Computed once here instead of in each later repair that uses this keyframe as a source.
     stored.blocks =
         std::make_shared<const inpainting::DepthBlocks>(inpainting::depth_blocks(stored.depth_m));
   }
