@@ -5,6 +5,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
+#include <optional>
 #include <vector>
 
 #include "ddl/core/error.h"
@@ -139,22 +140,23 @@ void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::M
   }
 }
 
-/// The source pixels whose samples can land in `target_box` of the current image: the part of
-/// the current view through that box between kMinSampleDepth and max_depth_m is a frustum, and
-/// its 8 corners, projected into the source, bound it there (convex hull -> bounding box). The
-/// whole source image when a corner lies behind the source camera.
-cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
-                       const camera::PinholeCamera& camera, double max_depth_m,
-                       cv::Size source_size) {
-  const cv::Rect whole({0, 0}, source_size);
+/// Where the frustum through the pixel rectangle [x0, x1] x [y0, y1] of one camera, between depths
+/// z_near and z_far, lands in another camera (p_other = R * p + t): the bounding box of its 8
+/// corners' projections, 1 px wider on the low side and 2 on the high side (rounding, and
+/// cv::Rect's exclusive end). The frustum is convex, and so is its image when every corner lies
+/// in front of the other camera, so the box bounds the projection of every point inside; none
+/// when a corner lies less than 5 cm in front of it.
+std::optional<cv::Rect> projected_frustum_box(int x0, int y0, int x1, int y1, double z_near,
+                                              double z_far, const Mat3d& R, const Vec3d& t,
+                                              const camera::PinholeCamera& camera) {
   double u_min = std::numeric_limits<double>::infinity(), v_min = u_min;
   double u_max = -u_min, v_max = -u_min;
-  for (const double z : {kMinSampleDepth, max_depth_m}) {
-    for (const int x : {target_box.x - 1, target_box.x + target_box.width}) {
-      for (const int y : {target_box.y - 1, target_box.y + target_box.height}) {
+  for (const double z : {z_near, z_far}) {
+    for (const int x : {x0, x1}) {
+      for (const int y : {y0, y1}) {
         const Vec3d p =
-            T_src_cur * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
-        if (p.z() <= 0.05) return whole;
+            R * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
+        if (p.z() <= 0.05) return std::nullopt;
         const double u = camera.fx * p.x() / p.z() + camera.cx;
         const double v = camera.fy * p.y() / p.z() + camera.cy;
         u_min = std::min(u_min, u);
@@ -165,21 +167,33 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
     }
   }
   const double big = 1e6;  // keeps the casts defined for far-off projections
-  const int x0 = static_cast<int>(std::floor(std::clamp(u_min, -big, big))) - 1;
-  const int y0 = static_cast<int>(std::floor(std::clamp(v_min, -big, big))) - 1;
-  const int x1 = static_cast<int>(std::ceil(std::clamp(u_max, -big, big))) + 2;
-  const int y1 = static_cast<int>(std::ceil(std::clamp(v_max, -big, big))) + 2;
-  return cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & whole;
+  return cv::Rect(cv::Point(static_cast<int>(std::floor(std::clamp(u_min, -big, big))) - 1,
+                            static_cast<int>(std::floor(std::clamp(v_min, -big, big))) - 1),
+                  cv::Point(static_cast<int>(std::ceil(std::clamp(u_max, -big, big))) + 2,
+                            static_cast<int>(std::ceil(std::clamp(v_max, -big, big))) + 2));
+}
+
+/// The source pixels whose samples can land in `target_box` of the current image: the part of
+/// the current view through that box (and the pixel ring around it) between kMinSampleDepth and
+/// max_depth_m, projected into the source. The whole source image when a corner lies behind the
+/// source camera.
+cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
+                       const camera::PinholeCamera& camera, double max_depth_m,
+                       cv::Size source_size) {
+  const cv::Rect whole({0, 0}, source_size);
+  const std::optional<cv::Rect> box =
+      projected_frustum_box(target_box.x - 1, target_box.y - 1, target_box.x + target_box.width,
+                            target_box.y + target_box.height, kMinSampleDepth, max_depth_m,
+                            T_src_cur.rotation(), T_src_cur.translation(), camera);
+  return box ? *box & whole : whole;
 }
 
 /// Source blocks of kCullBlock x kCullBlock pixels (aligned to the image origin) whose samples
 /// cannot land in the reach mask are skipped without projecting each pixel. A block's samples
 /// lie, in the source camera, inside the frustum through its pixel rectangle between the
-/// smallest and the largest depth measured in it; the frustum is convex with those 8 corners,
-/// and so is its image in the current camera when all corners lie in front of it, so the
-/// corners' bounding box there (1 px wider, for rounding) bounds every sample's target pixel. A
-/// block whose box holds no reach pixel is skipped: the splatted result is the same, sample for
-/// sample and in the same order.
+/// smallest and the largest depth measured in it, so projected_frustum_box bounds every sample's
+/// target pixel. A block whose box holds no reach pixel is skipped: the splatted result is the
+/// same, sample for sample and in the same order.
 constexpr int kCullBlock = DepthBlocks::kBlock;
 
 /// DepthBlocks over the blocks that overlap `window` (the others are left without depth). Every
@@ -235,36 +249,14 @@ std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect
       if (range.z_max[i] <= 0.0f) continue;  // no depth in the block
       const int x0 = bx * kCullBlock;
       const int y0 = by * kCullBlock;
-      double u_lo = std::numeric_limits<double>::infinity(), v_lo = u_lo;
-      double u_hi = -u_lo, v_hi = -u_lo;
-      bool in_front = true;
-      for (const float z : {range.z_min[i], range.z_max[i]}) {
-        for (const int x : {x0, x0 + kCullBlock - 1}) {
-          for (const int y : {y0, y0 + kCullBlock - 1}) {
-            const Vec3d p =
-                R * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
-            if (p.z() <= 0.05) in_front = false;
-            if (!in_front) break;
-            const double uc = camera.fx * p.x() / p.z() + camera.cx;
-            const double vc = camera.fy * p.y() / p.z() + camera.cy;
-            u_lo = std::min(u_lo, uc);
-            u_hi = std::max(u_hi, uc);
-            v_lo = std::min(v_lo, vc);
-            v_hi = std::max(v_hi, vc);
-          }
-        }
-      }
-      if (!in_front) {
-        active[i] = 1;
+      const std::optional<cv::Rect> frustum =
+          projected_frustum_box(x0, y0, x0 + kCullBlock - 1, y0 + kCullBlock - 1, range.z_min[i],
+                                range.z_max[i], R, t, camera);
+      if (!frustum) {
+        active[i] = 1;  // a corner behind the current camera: no bound
         continue;
       }
-      const double big = 1e6;  // keeps the casts defined for far-off projections
-      const cv::Rect box =
-          cv::Rect(cv::Point(static_cast<int>(std::floor(std::clamp(u_lo, -big, big))) - 1,
-                             static_cast<int>(std::floor(std::clamp(v_lo, -big, big))) - 1),
-                   cv::Point(static_cast<int>(std::ceil(std::clamp(u_hi, -big, big))) + 2,
-                             static_cast<int>(std::ceil(std::clamp(v_hi, -big, big))) + 2)) &
-          reach_box;
+      const cv::Rect box = *frustum & reach_box;
       if (box.empty()) continue;
       const int reached = reach_sum.at<int>(box.y + box.height, box.x + box.width) -
                           reach_sum.at<int>(box.y, box.x + box.width) -

@@ -60,11 +60,16 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
   const Mat3d R = scan.T_w_c.rotation();
   const Vec3d t = scan.T_w_c.translation();
   const int stride = config_.pixel_stride;
-  struct Coloured {
-    Vec3d p_w;
-    cv::Vec3b bgr;
+  // The scan's colour of a voxel is the mean of its points (one tree search per voxel, not per
+  // point); it is averaged into the voxel's colour so far, after the insertion. Colours go to the
+  // leaves (found by key, which needs no inner node); one update of the inner nodes afterwards
+  // sets their occupancy and colour.
+  struct ColourSum {
+    ::octomap::OcTreeKey key;
+    std::uint32_t b = 0, g = 0, r = 0, n = 0;
   };
-  std::vector<Coloured> colours;
+  std::vector<ColourSum> sums;  // in the order the voxels are first seen
+  std::unordered_map<::octomap::OcTreeKey, std::size_t, ::octomap::OcTreeKey::KeyHash> voxel;
   // max_range_m bounds the ray (OctoMap's meaning): a longer ray still clears the space along its
   // first max_range_m but marks nothing occupied, so it is inserted and not coloured. Until
   // 2026-11-26 depth z was compared instead: rays off the image centre with z below the range
@@ -79,40 +84,25 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
       if (xrow != nullptr && xrow[u] != 0) continue;
       const Vec3d p_c = camera_.unproject(u, v, z);
       const Vec3d p_w = R * p_c + t;
-      cloud.push_back(static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
-                      static_cast<float>(p_w.z()));
-      if (p_c.squaredNorm() <= max_range2) colours.push_back({p_w, scan.bgr.at<cv::Vec3b>(v, u)});
+      const ::octomap::point3d p(static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
+                                 static_cast<float>(p_w.z()));
+      cloud.push_back(p);
+      ::octomap::OcTreeKey key;  // the voxel of the point as inserted (floats)
+      if (p_c.squaredNorm() > max_range2 || !tree_->coordToKeyChecked(p, key)) continue;
+      const auto [it, added] = voxel.try_emplace(key, sums.size());
+      if (added) sums.push_back({key});
+      ColourSum& sum = sums[it->second];
+      const cv::Vec3b& bgr = scan.bgr.at<cv::Vec3b>(v, u);
+      sum.b += bgr[0];
+      sum.g += bgr[1];
+      sum.r += bgr[2];
+      ++sum.n;
     }
   }
   const ::octomap::point3d origin(static_cast<float>(t.x()), static_cast<float>(t.y()),
                                   static_cast<float>(t.z()));
   tree_->insertPointCloud(cloud, origin, config_.max_range_m, /*lazy_eval=*/true,
                           /*discretize=*/true);
-  // The scan's colour of a voxel is the mean of its points (one tree search per voxel, not per
-  // point); it is averaged into the voxel's colour so far. Colours go to the leaves (found by key,
-  // which needs no inner node); one update of the inner nodes afterwards sets their occupancy and
-  // colour.
-  struct ColourSum {
-    ::octomap::OcTreeKey key;
-    std::uint32_t b = 0, g = 0, r = 0, n = 0;
-  };
-  std::vector<ColourSum> sums;
-  std::unordered_map<::octomap::OcTreeKey, std::size_t, ::octomap::OcTreeKey::KeyHash> voxel;
-  voxel.reserve(colours.size());
-  for (const Coloured& c : colours) {
-    ::octomap::OcTreeKey key;
-    // The voxel of the point as inserted: the cloud holds floats.
-    const ::octomap::point3d p(static_cast<float>(c.p_w.x()), static_cast<float>(c.p_w.y()),
-                               static_cast<float>(c.p_w.z()));
-    if (!tree_->coordToKeyChecked(p, key)) continue;
-    const auto [it, added] = voxel.try_emplace(key, sums.size());
-    if (added) sums.push_back({key});
-    ColourSum& sum = sums[it->second];
-    sum.b += c.bgr[0];
-    sum.g += c.bgr[1];
-    sum.r += c.bgr[2];
-    ++sum.n;
-  }
   auto mean = [](std::uint32_t total, std::uint32_t n) {
     return static_cast<std::uint8_t>((total + n / 2) / n);
   };
