@@ -74,6 +74,13 @@ int red_pixels(const InpaintingResult& r) {
   return cv::countNonZero(red & r.filled);
 }
 
+// Pixels (channel values) in which two images differ.
+int differing(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat d;
+  cv::compare(a.reshape(1), b.reshape(1), d, cv::CMP_NE);
+  return cv::countNonZero(d);
+}
+
 // Filled pixels of the rendered grey person (BGR 90, 90, 90).
 int grey_pixels(const InpaintingResult& r) {
   cv::Mat grey;
@@ -229,6 +236,18 @@ TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
   EXPECT_GT(checked.filled_pixels, 0.85 * checked.masked_pixels);
   const View truth = render(cam, T_w_cur, false);
   EXPECT_GT(psnr_over(checked.bgr, truth.bgr, checked.filled), 30.0);
+  // With the sources' depth blocks the check skips, per tile, the sources that cannot vote there;
+  // the votes and so the result are the same (a bound that skips a voter lets the remnant in).
+  std::vector<SourceView> with_blocks = sources;
+  for (SourceView& v : with_blocks) {
+    v.blocks = std::make_shared<const DepthBlocks>(depth_blocks(v.depth_m));
+  }
+  const auto culled =
+      inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), with_blocks, cam, config);
+  EXPECT_EQ(red_pixels(culled), 0);
+  EXPECT_EQ(culled.filled_pixels, checked.filled_pixels);
+  EXPECT_EQ(differing(culled.bgr, checked.bgr), 0);
+  EXPECT_EQ(differing(culled.depth_m, checked.depth_m), 0);
   config.see_through_votes = 0;
   const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
   EXPECT_GT(red_pixels(unchecked), 500);
@@ -336,21 +355,27 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     sources.push_back({f.T_w_c, f.rgb, depth, dynamic, repaired});
     ++k;
   }
-  auto differing = [](const cv::Mat& a, const cv::Mat& b) {
-    cv::Mat d;
-    cv::compare(a.reshape(1), b.reshape(1), d, cv::CMP_NE);
-    return cv::countNonZero(d);
-  };
   // Also with a source stride (the skip lands on the next sample of the stride) and images whose
   // size is no multiple of the block size (partial blocks at the right and bottom edges).
-  for (const auto& [stride, size] :
-       {std::pair{1, cv::Size(640, 480)}, std::pair{3, cv::Size(636, 478)}}) {
-    SCOPED_TRACE(::testing::Message() << "stride " << stride << ", " << size);
+  // And with sources repaired everywhere outside their exclude masks: then only the passes over
+  // repaired samples fill, whose blocks are bounded by the repaired samples' depths.
+  struct Variant {
+    int stride;
+    cv::Size size;
+    bool all_repaired;
+  };
+  for (const auto& [stride, size, all_repaired] :
+       {Variant{1, {640, 480}, false}, Variant{3, {636, 478}, false},
+        Variant{1, {640, 480}, true}}) {
+    SCOPED_TRACE(::testing::Message()
+                 << "stride " << stride << ", " << size << (all_repaired ? ", all repaired" : ""));
     const cv::Rect crop({0, 0}, size);
     std::vector<SourceView> cropped;
     for (const SourceView& v : sources) {
+      const cv::Mat repaired =
+          all_repaired ? cv::Mat(cv::Mat(v.exclude_mask == 0)) : v.repaired_mask;
       cropped.push_back(
-          {v.T_w_c, v.bgr(crop), v.depth_m(crop), v.exclude_mask(crop), v.repaired_mask(crop)});
+          {v.T_w_c, v.bgr(crop), v.depth_m(crop), v.exclude_mask(crop), repaired(crop)});
     }
     InpaintingConfig config;
     config.source_stride_px = stride;
@@ -361,7 +386,8 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     // The same with each source's depth blocks computed beforehand (as the dense stage keeps them).
     std::vector<SourceView> with_blocks = cropped;
     for (SourceView& v : with_blocks) {
-      v.blocks = std::make_shared<const DepthBlocks>(depth_blocks(v.depth_m));
+      v.blocks = std::make_shared<const DepthBlocks>(
+          depth_blocks(v.depth_m, v.exclude_mask, v.repaired_mask));
     }
     const auto kept = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
                               target.T_w_c.inverse(), with_blocks, cam, config);
@@ -386,6 +412,12 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
   cv::resize(foreign[0].depth_m, small_depth, {320, 240}, 0, 0, cv::INTER_NEAREST);
   foreign[0].blocks = std::make_shared<const DepthBlocks>(depth_blocks(small_depth));
   EXPECT_THROW(inpaint(target.rgb, target_depth, target_mask, target.T_w_c.inverse(), foreign, cam,
+                       InpaintingConfig{}),
+               Error);
+  // So are blocks computed without the source's masks: they would skip its repaired samples.
+  std::vector<SourceView> maskless = sources;
+  maskless[0].blocks = std::make_shared<const DepthBlocks>(depth_blocks(maskless[0].depth_m));
+  EXPECT_THROW(inpaint(target.rgb, target_depth, target_mask, target.T_w_c.inverse(), maskless, cam,
                        InpaintingConfig{}),
                Error);
 }

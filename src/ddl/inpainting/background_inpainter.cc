@@ -94,69 +94,27 @@ void resample_colour(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& 
   }
 }
 
-/// Multi-view check of the filled pixels: a filled point that at least see_through_votes other
-/// sources saw through (their observed, unexcluded depth at its projection lies farther than it
-/// by more than the tolerance) was empty space when they were taken, so it is a piece of a moving
-/// object that its source's mask missed; the pixel is left unfilled (the original frame's values
-/// come back). Static background is never seen through, except across depth edges within pose
-/// and depth error, hence more than one vote.
-void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& winner,
-                         const cv::Mat& bgr, const cv::Mat& depth_m, const SE3& T_c_w,
-                         const std::vector<SourceView>& sources, std::size_t count,
-                         const camera::PinholeCamera& camera, const InpaintingConfig& config) {
-  std::vector<SE3> T_src_cur;
-  for (std::size_t s = 0; s < count; ++s) {
-    T_src_cur.push_back(sources[s].T_w_c.inverse() * T_c_w.inverse());
-  }
-  for (int y = 0; y < out.filled.rows; ++y) {
-    std::uint8_t* frow = out.filled.ptr(y);
-    const float* zrow = zbuf.ptr<float>(y);
-    const std::uint8_t* wrow = winner.ptr(y);
-    for (int x = 0; x < out.filled.cols; ++x) {
-      if (frow[x] == 0) continue;
-      const double z = zrow[x];
-      const Vec3d p_cur((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
-      int votes = 0;
-      for (std::size_t s = 0; s < count && votes < config.see_through_votes; ++s) {
-        if (s == wrow[x]) continue;
-        const SourceView& src = sources[s];
-        const Vec3d p = T_src_cur[s] * p_cur;
-        if (p.z() < kMinSampleDepth) continue;
-        const int u = cvRound(camera.fx * p.x() / p.z() + camera.cx);
-        const int v = cvRound(camera.fy * p.y() / p.z() + camera.cy);
-        if (u < 0 || v < 0 || u >= src.depth_m.cols || v >= src.depth_m.rows) continue;
-        if (!src.exclude_mask.empty() && src.exclude_mask.at<std::uint8_t>(v, u) != 0) continue;
-        if (!src.repaired_mask.empty() && src.repaired_mask.at<std::uint8_t>(v, u) != 0) continue;
-        const float d = src.depth_m.at<float>(v, u);
-        const double tol = config.depth_tolerance_m + config.depth_tolerance_rel * p.z();
-        if (d > 0.0f && d > p.z() + tol) ++votes;
-      }
-      if (votes >= config.see_through_votes) {
-        frow[x] = 0;
-        out.bgr.at<cv::Vec3b>(y, x) = bgr.at<cv::Vec3b>(y, x);
-        out.depth_m.at<float>(y, x) = depth_m.at<float>(y, x);
-      }
-    }
-  }
-}
-
 /// Where the frustum through the pixel rectangle [x0, x1] x [y0, y1] of one camera, between depths
 /// z_near and z_far, lands in another camera (p_other = R * p + t): the bounding box of its 8
 /// corners' projections, 1 px wider on the low side and 2 on the high side (rounding, and
 /// cv::Rect's exclusive end). The frustum is convex, and so is its image when every corner lies
 /// in front of the other camera, so the box bounds the projection of every point inside; none
-/// when a corner lies less than 5 cm in front of it.
+/// when a corner lies less than 5 cm in front of it. `z_min_other`, when given, receives the
+/// smallest depth of the frustum in the other camera (that of a corner, as depth is linear).
 std::optional<cv::Rect> projected_frustum_box(int x0, int y0, int x1, int y1, double z_near,
                                               double z_far, const Mat3d& R, const Vec3d& t,
-                                              const camera::PinholeCamera& camera) {
+                                              const camera::PinholeCamera& camera,
+                                              double* z_min_other = nullptr) {
   double u_min = std::numeric_limits<double>::infinity(), v_min = u_min;
   double u_max = -u_min, v_max = -u_min;
+  double z_min = u_min;
   for (const double z : {z_near, z_far}) {
     for (const int x : {x0, x1}) {
       for (const int y : {y0, y1}) {
         const Vec3d p =
             R * Vec3d((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z) + t;
         if (p.z() <= 0.05) return std::nullopt;
+        z_min = std::min(z_min, p.z());
         const double u = camera.fx * p.x() / p.z() + camera.cx;
         const double v = camera.fy * p.y() / p.z() + camera.cy;
         u_min = std::min(u_min, u);
@@ -166,6 +124,7 @@ std::optional<cv::Rect> projected_frustum_box(int x0, int y0, int x1, int y1, do
       }
     }
   }
+  if (z_min_other != nullptr) *z_min_other = z_min;
   const double big = 1e6;  // keeps the casts defined for far-off projections
   return cv::Rect(cv::Point(static_cast<int>(std::floor(std::clamp(u_min, -big, big))) - 1,
                             static_cast<int>(std::floor(std::clamp(v_min, -big, big))) - 1),
@@ -196,15 +155,19 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
 /// same, sample for sample and in the same order.
 constexpr int kCullBlock = DepthBlocks::kBlock;
 
-/// DepthBlocks over the blocks that overlap `window` (the others are left without depth). Every
-/// measured depth counts, masked or not, so the range bounds the samples of every pass.
-DepthBlocks block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
+/// DepthBlocks over the blocks that overlap `window` (the others are left without depth), of the
+/// samples outside `exclude` (may be empty), split by `repaired` (may be empty).
+DepthBlocks block_depth_range(const cv::Mat& depth_m, const cv::Mat& exclude,
+                              const cv::Mat& repaired, const cv::Rect& window) {
   DepthBlocks range;
   range.blocks_x = (depth_m.cols + kCullBlock - 1) / kCullBlock;
   range.blocks_y = (depth_m.rows + kCullBlock - 1) / kCullBlock;
   const std::size_t n = static_cast<std::size_t>(range.blocks_x) * range.blocks_y;
-  range.z_min.assign(n, std::numeric_limits<float>::infinity());
-  range.z_max.assign(n, 0.0f);
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  for (DepthBlocks::Range* r : {&range.all, &range.observed, &range.repaired}) {
+    r->z_min.assign(n, kInf);
+    r->z_max.assign(n, 0.0f);
+  }
   if (window.empty()) return range;
   const int bx_begin = window.x / kCullBlock;
   const int bx_end = (window.x + window.width - 1) / kCullBlock;  // inclusive
@@ -213,29 +176,39 @@ DepthBlocks block_depth_range(const cv::Mat& depth_m, const cv::Rect& window) {
       std::min(((window.y + window.height - 1) / kCullBlock + 1) * kCullBlock, depth_m.rows);
   for (int y = y_begin; y < y_end; ++y) {
     const float* row = depth_m.ptr<float>(y);
+    const std::uint8_t* xrow = exclude.empty() ? nullptr : exclude.ptr(y);
+    const std::uint8_t* rrow = repaired.empty() ? nullptr : repaired.ptr(y);
     const std::size_t base = static_cast<std::size_t>(y / kCullBlock) * range.blocks_x;
     for (int bx = bx_begin; bx <= bx_end; ++bx) {
       const int x1 = std::min((bx + 1) * kCullBlock, depth_m.cols);
-      float lo = range.z_min[base + bx];
-      float hi = range.z_max[base + bx];
+      // [0] observed, [1] repaired.
+      float lo[2] = {range.observed.z_min[base + bx], range.repaired.z_min[base + bx]};
+      float hi[2] = {range.observed.z_max[base + bx], range.repaired.z_max[base + bx]};
       for (int x = bx * kCullBlock; x < x1; ++x) {
         // Finite positive depths only (an infinite one would make the corners NaN, which min
-        // and max skip); samples of any other depth are rejected by the splat loop anyway.
+        // and max skip); samples of any other depth are rejected by the splat loop anyway, as
+        // are excluded ones.
         const float z = row[x];
-        const bool measured = z > 0.0f && z < std::numeric_limits<float>::infinity();
-        lo = std::min(lo, measured ? z : std::numeric_limits<float>::infinity());
-        hi = std::max(hi, measured ? z : 0.0f);
+        const bool usable = z > 0.0f && z < kInf && (xrow == nullptr || xrow[x] == 0);
+        const int k = (rrow != nullptr && rrow[x] != 0) ? 1 : 0;
+        lo[k] = std::min(lo[k], usable ? z : kInf);
+        hi[k] = std::max(hi[k], usable ? z : 0.0f);
       }
-      range.z_min[base + bx] = lo;
-      range.z_max[base + bx] = hi;
+      range.observed.z_min[base + bx] = lo[0];
+      range.observed.z_max[base + bx] = hi[0];
+      range.repaired.z_min[base + bx] = lo[1];
+      range.repaired.z_max[base + bx] = hi[1];
+      range.all.z_min[base + bx] = std::min(lo[0], lo[1]);
+      range.all.z_max[base + bx] = std::max(hi[0], hi[1]);
     }
   }
   return range;
 }
 
 /// Per block of the source: 1 = some sample of it may land in the reach mask.
-std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect& window,
-                                        const SE3& T_cur_src, const camera::PinholeCamera& camera,
+std::vector<std::uint8_t> active_blocks(const DepthBlocks::Range& range, int blocks_x,
+                                        const cv::Rect& window, const SE3& T_cur_src,
+                                        const camera::PinholeCamera& camera,
                                         const cv::Mat& reach_sum, const cv::Rect& reach_box) {
   std::vector<std::uint8_t> active(range.z_min.size(), 0);
   if (window.empty()) return active;
@@ -245,8 +218,8 @@ std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect
   const int by_end = (window.y + window.height - 1) / kCullBlock;
   for (int by = window.y / kCullBlock; by <= by_end; ++by) {
     for (int bx = window.x / kCullBlock; bx <= bx_end; ++bx) {
-      const std::size_t i = static_cast<std::size_t>(by) * range.blocks_x + bx;
-      if (range.z_max[i] <= 0.0f) continue;  // no depth in the block
+      const std::size_t i = static_cast<std::size_t>(by) * blocks_x + bx;
+      if (range.z_max[i] <= 0.0f) continue;  // no usable depth in the block
       const int x0 = bx * kCullBlock;
       const int y0 = by * kCullBlock;
       const std::optional<cv::Rect> frustum =
@@ -268,20 +241,146 @@ std::vector<std::uint8_t> active_blocks(const DepthBlocks& range, const cv::Rect
   return active;
 }
 
-/// Whether `blocks` has the layout of depth_blocks(depth_m) (it cannot tell the depths apart).
-bool matches(const DepthBlocks& blocks, const cv::Mat& depth_m) {
+/// Multi-view check of the filled pixels: a filled point that at least see_through_votes other
+/// sources saw through (their observed, unexcluded depth at its projection lies farther than it
+/// by more than the tolerance) was empty space when they were taken, so it is a piece of a moving
+/// object that its source's mask missed; the pixel is left unfilled (the original frame's values
+/// come back). Static background is never seen through, except across depth edges within pose
+/// and depth error, hence more than one vote. The pixels are taken in tiles of kCullBlock x
+/// kCullBlock; a source that cannot vote for any pixel of a tile is not asked for each: the
+/// tile's filled points (between their smallest and largest depth) land outside its image, or
+/// nothing it observed there (its DepthBlocks, when given) lies farther than the nearest of them
+/// by the tolerance. The votes, and so the result, are the same.
+void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& winner,
+                         const cv::Mat& bgr, const cv::Mat& depth_m, const SE3& T_c_w,
+                         const std::vector<SourceView>& sources, std::size_t count,
+                         const camera::PinholeCamera& camera, const InpaintingConfig& config) {
+  std::vector<SE3> T_src_cur;
+  for (std::size_t s = 0; s < count; ++s) {
+    T_src_cur.push_back(sources[s].T_w_c.inverse() * T_c_w.inverse());
+  }
+  std::vector<std::size_t> candidates;
+  candidates.reserve(count);
+  for (int ty = 0; ty < out.filled.rows; ty += kCullBlock) {
+    for (int tx = 0; tx < out.filled.cols; tx += kCullBlock) {
+      const int tx1 = std::min(tx + kCullBlock, out.filled.cols);  // exclusive
+      const int ty1 = std::min(ty + kCullBlock, out.filled.rows);
+      float z_lo = std::numeric_limits<float>::infinity();
+      float z_hi = 0.0f;
+      for (int y = ty; y < ty1; ++y) {
+        const std::uint8_t* frow = out.filled.ptr(y);
+        const float* zrow = zbuf.ptr<float>(y);
+        for (int x = tx; x < tx1; ++x) {
+          if (frow[x] == 0) continue;
+          z_lo = std::min(z_lo, zrow[x]);
+          z_hi = std::max(z_hi, zrow[x]);
+        }
+      }
+      if (z_hi <= 0.0f) continue;  // no filled pixel in the tile
+      candidates.clear();
+      for (std::size_t s = 0; s < count; ++s) {
+        const SourceView& src = sources[s];
+        double z_near = 0.0;
+        const std::optional<cv::Rect> box =
+            projected_frustum_box(tx, ty, tx1 - 1, ty1 - 1, z_lo, z_hi, T_src_cur[s].rotation(),
+                                  T_src_cur[s].translation(), camera, &z_near);
+        if (box) {
+          const cv::Rect in_image = *box & cv::Rect({0, 0}, src.depth_m.size());
+          if (in_image.empty()) continue;
+          if (src.blocks) {
+            // The farthest observed depth under the box, against the nearest vote threshold.
+            const DepthBlocks& blocks = *src.blocks;
+            float farthest = 0.0f;
+            for (int by = in_image.y / kCullBlock;
+                 by <= (in_image.y + in_image.height - 1) / kCullBlock; ++by) {
+              for (int bx = in_image.x / kCullBlock;
+                   bx <= (in_image.x + in_image.width - 1) / kCullBlock; ++bx) {
+                farthest = std::max(
+                    farthest,
+                    blocks.observed.z_max[static_cast<std::size_t>(by) * blocks.blocks_x + bx]);
+              }
+            }
+            const double threshold = std::max(z_near, kMinSampleDepth) + config.depth_tolerance_m +
+                                     config.depth_tolerance_rel * std::max(z_near, 0.0);
+            if (farthest < threshold - 1e-4) continue;
+          }
+        }
+        candidates.push_back(s);
+      }
+      if (candidates.empty()) continue;
+      for (int y = ty; y < ty1; ++y) {
+        std::uint8_t* frow = out.filled.ptr(y);
+        const float* zrow = zbuf.ptr<float>(y);
+        const std::uint8_t* wrow = winner.ptr(y);
+        for (int x = tx; x < tx1; ++x) {
+          if (frow[x] == 0) continue;
+          const double z = zrow[x];
+          const Vec3d p_cur((x - camera.cx) / camera.fx * z, (y - camera.cy) / camera.fy * z, z);
+          int votes = 0;
+          for (const std::size_t s : candidates) {
+            if (votes >= config.see_through_votes) break;
+            if (s == wrow[x]) continue;
+            const SourceView& src = sources[s];
+            const Vec3d p = T_src_cur[s] * p_cur;
+            if (p.z() < kMinSampleDepth) continue;
+            const int u = cvRound(camera.fx * p.x() / p.z() + camera.cx);
+            const int v = cvRound(camera.fy * p.y() / p.z() + camera.cy);
+            if (u < 0 || v < 0 || u >= src.depth_m.cols || v >= src.depth_m.rows) continue;
+            if (!src.exclude_mask.empty() && src.exclude_mask.at<std::uint8_t>(v, u) != 0) {
+              continue;
+            }
+            if (!src.repaired_mask.empty() && src.repaired_mask.at<std::uint8_t>(v, u) != 0) {
+              continue;
+            }
+            const float d = src.depth_m.at<float>(v, u);
+            const double tol = config.depth_tolerance_m + config.depth_tolerance_rel * p.z();
+            if (d > 0.0f && d < std::numeric_limits<float>::infinity() && d > p.z() + tol) {
+              ++votes;  // a finite depth only, as the blocks bound (none is infinite from a sensor)
+            }
+          }
+          if (votes >= config.see_through_votes) {
+            frow[x] = 0;
+            out.bgr.at<cv::Vec3b>(y, x) = bgr.at<cv::Vec3b>(y, x);
+            out.depth_m.at<float>(y, x) = depth_m.at<float>(y, x);
+          }
+        }
+      }
+    }
+  }
+}
+
+/// Whether `blocks` has the layout of depth_blocks(depth_m) and was computed with the source's
+/// masks (their buffers; it cannot tell the depths or the mask contents apart).
+bool matches(const DepthBlocks& blocks, const SourceView& src) {
+  const cv::Mat& depth_m = src.depth_m;
+  if (blocks.exclude_data != (src.exclude_mask.empty() ? nullptr : src.exclude_mask.data) ||
+      blocks.repaired_data != (src.repaired_mask.empty() ? nullptr : src.repaired_mask.data)) {
+    return false;
+  }
   const int bx = (depth_m.cols + kCullBlock - 1) / kCullBlock;
   const int by = (depth_m.rows + kCullBlock - 1) / kCullBlock;
   const std::size_t n = static_cast<std::size_t>(bx) * static_cast<std::size_t>(by);
-  return blocks.blocks_x == bx && blocks.blocks_y == by && blocks.z_min.size() == n &&
-         blocks.z_max.size() == n;
+  for (const DepthBlocks::Range* r : {&blocks.all, &blocks.observed, &blocks.repaired}) {
+    if (r->z_min.size() != n || r->z_max.size() != n) return false;
+  }
+  return blocks.blocks_x == bx && blocks.blocks_y == by;
 }
 
 }  // namespace
 
-DepthBlocks depth_blocks(const cv::Mat& depth_m) {
+DepthBlocks depth_blocks(const cv::Mat& depth_m, const cv::Mat& exclude_mask,
+                         const cv::Mat& repaired_mask) {
   if (depth_m.type() != CV_32FC1) throw Error("depth_blocks: expects CV_32FC1 depth");
-  return block_depth_range(depth_m, cv::Rect({0, 0}, depth_m.size()));
+  for (const cv::Mat* m : {&exclude_mask, &repaired_mask}) {
+    if (!m->empty() && (m->type() != CV_8UC1 || m->size() != depth_m.size())) {
+      throw Error("depth_blocks: masks must be CV_8UC1 of the depth's size (or empty)");
+    }
+  }
+  DepthBlocks blocks =
+      block_depth_range(depth_m, exclude_mask, repaired_mask, cv::Rect({0, 0}, depth_m.size()));
+  blocks.exclude_data = exclude_mask.empty() ? nullptr : exclude_mask.data;
+  blocks.repaired_data = repaired_mask.empty() ? nullptr : repaired_mask.data;
+  return blocks;
 }
 
 InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::Mat& mask,
@@ -309,6 +408,11 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   const float tol_abs = static_cast<float>(config.depth_tolerance_m);
   const float tol_rel = static_cast<float>(config.depth_tolerance_rel);
   const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  // (u - cx) / fx of every source column, the same value the expression gives in the loop.
+  int source_cols = 0;
+  for (const SourceView& src : sources) source_cols = std::max(source_cols, src.depth_m.cols);
+  std::vector<double> x_norm(static_cast<std::size_t>(source_cols));
+  for (int u = 0; u < source_cols; ++u) x_norm[static_cast<std::size_t>(u)] = (u - cx) / fx;
   // Most source pixels land outside the mask: reject them with one lookup in the mask grown by
   // the splat radius (and its bounding box) instead of testing every splat position. Passes after
   // the first reach only the masked pixels still empty.
@@ -364,8 +468,15 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     for (std::size_t s = passes[pass].begin; s < passes[pass].end; ++s) {
       const SourceView& src = sources[s];
       if (take == Take::kRepaired && src.repaired_mask.empty()) continue;
-      if (src.blocks && !matches(*src.blocks, src.depth_m)) {
-        throw Error("inpaint: a source's depth blocks are not those of its depth image's size");
+      for (const cv::Mat* m : {&src.exclude_mask, &src.repaired_mask}) {
+        if (!m->empty() && (m->type() != CV_8UC1 || m->size() != src.depth_m.size())) {
+          throw Error("inpaint: a source's masks must be CV_8UC1 of its depth's size (or empty)");
+        }
+      }
+      if (src.blocks && !matches(*src.blocks, src)) {
+        throw Error(
+            "inpaint: a source's depth blocks were not computed for its depth image's size and "
+            "its masks");
       }
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
@@ -383,17 +494,22 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
         if (blocks == nullptr) {
           // A later pass of the same source reaches fewer pixels: its window lies inside.
           CachedRange& cached = depth_ranges[s];
-          if (cached.range.z_min.empty() || (cached.window & window) != window) {
-            cached = {window, block_depth_range(src.depth_m, window)};
+          if (cached.range.all.z_min.empty() || (cached.window & window) != window) {
+            cached = {window,
+                      block_depth_range(src.depth_m, src.exclude_mask, src.repaired_mask, window)};
           }
           blocks = &cached.range;
         }
-        active = active_blocks(*blocks, window, T_cur_src, camera, reach_sum, reach_box);
+        const DepthBlocks::Range& range = take == Take::kObserved   ? blocks->observed
+                                          : take == Take::kRepaired ? blocks->repaired
+                                                                    : blocks->all;
+        active = active_blocks(range, blocks_x, window, T_cur_src, camera, reach_sum, reach_box);
       } else {
         active.assign(
             static_cast<std::size_t>(blocks_x) * ((src.depth_m.rows + kCullBlock - 1) / kCullBlock),
             1);
       }
+      const int u_end = window.x + window.width;
       for (int v = v_begin; v < window.y + window.height; v += stride) {
         const float* drow = src.depth_m.ptr<float>(v);
         const cv::Vec3b* crow = src.bgr.ptr<cv::Vec3b>(v);
@@ -401,53 +517,56 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
         const std::uint8_t* rrow = src.repaired_mask.empty() ? nullptr : src.repaired_mask.ptr(v);
         const std::uint8_t* active_row =
             active.data() + static_cast<std::size_t>(v / kCullBlock) * blocks_x;
-        for (int u = u_begin; u < window.x + window.width; u += stride) {
-          if (active_row[u / kCullBlock] == 0) {
-            // Resume at the first sample of the next block (the loop adds the stride).
-            const int next = (u / kCullBlock + 1) * kCullBlock;
-            u = (next + stride - 1) / stride * stride - stride;
-            continue;
-          }
-          const float z = drow[u];
-          if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
-          if (take != Take::kAny) {
-            const bool repaired = rrow != nullptr && rrow[u] != 0;
-            if (repaired != (take == Take::kRepaired)) continue;
-          }
-          const Vec3d p_src((u - cx) / fx * z, (v - cy) / fy * z, z);
-          const Vec3d p = R * p_src + t;
-          if (p.z() < kMinSampleDepth || p.z() > config.max_depth_m) continue;
-          const double uc = fx * p.x() / p.z() + cx;
-          const double vc = fy * p.y() / p.z() + cy;
-          if (!(std::abs(uc) < 1e6 && std::abs(vc) < 1e6)) continue;
-          const int iu = cvRound(uc);
-          const int iv = cvRound(vc);
-          if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
-          const float zc = static_cast<float>(p.z());
-          const float tol = tol_abs + tol_rel * zc;
-          for (int dv = -r; dv <= r; ++dv) {
-            const int y = iv + dv;
-            if (y < 0 || y >= h) continue;
-            const std::uint8_t* mrow = mask.ptr(y);
-            const float* drow_cur = depth_m.ptr<float>(y);
-            float* zrow = zbuf.ptr<float>(y);
-            const std::uint8_t* lrow = pass > 0 ? locked.ptr(y) : nullptr;
-            for (int du = -r; du <= r; ++du) {
-              const int x = iu + du;
-              if (x < 0 || x >= w || mrow[x] == 0) continue;
-              if (lrow != nullptr && lrow[x] != 0) continue;
-              if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) continue;
-              if (config.behind_current_only && drow_cur[x] > 0.0f && zc <= drow_cur[x] + tol) {
-                continue;
-              }
-              // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
-              if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
-                                         out.filled.at<std::uint8_t>(y, x) != 2)) {
-                zrow[x] = zc;
-                out.bgr.at<cv::Vec3b>(y, x) = crow[u];
-                out.depth_m.at<float>(y, x) = zc;
-                out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
-                winner.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(s);
+        const double y_norm = (v - cy) / fy;
+        // The samples of the active blocks, in increasing u (the order decides ties).
+        for (int bx = window.x / kCullBlock; bx * kCullBlock < u_end; ++bx) {
+          if (active_row[bx] == 0) continue;
+          const int u_first = std::max(u_begin, (bx * kCullBlock + stride - 1) / stride * stride);
+          const int u_last = std::min(u_end, (bx + 1) * kCullBlock);  // exclusive
+          for (int u = u_first; u < u_last; u += stride) {
+            const float z = drow[u];
+            if (z <= 0.0f || z > config.max_depth_m || (xrow != nullptr && xrow[u] != 0)) continue;
+            if (take != Take::kAny) {
+              const bool repaired = rrow != nullptr && rrow[u] != 0;
+              if (repaired != (take == Take::kRepaired)) continue;
+            }
+            const Vec3d p_src(x_norm[u] * z, y_norm * z, z);
+            const Vec3d p = R * p_src + t;
+            if (p.z() < kMinSampleDepth || p.z() > config.max_depth_m) continue;
+            const double uc = fx * p.x() / p.z() + cx;
+            const double vc = fy * p.y() / p.z() + cy;
+            if (!(std::abs(uc) < 1e6 && std::abs(vc) < 1e6)) continue;
+            const int iu = cvRound(uc);
+            const int iv = cvRound(vc);
+            if (!reach_box.contains({iu, iv}) || reach.at<std::uint8_t>(iv, iu) == 0) continue;
+            const float zc = static_cast<float>(p.z());
+            const float tol = tol_abs + tol_rel * zc;
+            for (int dv = -r; dv <= r; ++dv) {
+              const int y = iv + dv;
+              if (y < 0 || y >= h) continue;
+              const std::uint8_t* mrow = mask.ptr(y);
+              const float* drow_cur = depth_m.ptr<float>(y);
+              float* zrow = zbuf.ptr<float>(y);
+              const std::uint8_t* lrow = pass > 0 ? locked.ptr(y) : nullptr;
+              for (int du = -r; du <= r; ++du) {
+                const int x = iu + du;
+                if (x < 0 || x >= w || mrow[x] == 0) continue;
+                if (lrow != nullptr && lrow[x] != 0) continue;
+                if (config.free_space_check && drow_cur[x] > 0.0f && zc < drow_cur[x] - tol) {
+                  continue;
+                }
+                if (config.behind_current_only && drow_cur[x] > 0.0f && zc <= drow_cur[x] + tol) {
+                  continue;
+                }
+                // Centre sample beats a neighbour's splat at equal depth; nearer beats farther.
+                if (zc < zrow[x] - tol || (du == 0 && dv == 0 && zc < zrow[x] + tol &&
+                                           out.filled.at<std::uint8_t>(y, x) != 2)) {
+                  zrow[x] = zc;
+                  out.bgr.at<cv::Vec3b>(y, x) = crow[u];
+                  out.depth_m.at<float>(y, x) = zc;
+                  out.filled.at<std::uint8_t>(y, x) = (du == 0 && dv == 0) ? 2 : 1;
+                  winner.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(s);
+                }
               }
             }
           }

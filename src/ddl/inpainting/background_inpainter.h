@@ -67,19 +67,34 @@ struct InpaintingConfig {
   void validate() const;
 };
 
-/// Smallest and largest finite positive depth of each kBlock x kBlock block of a depth image
-/// (+inf and 0 where it has none, or where it was not computed). inpaint() skips the source blocks
-/// that cannot reach the mask with it; a caller that keeps its sources computes it once per source.
+/// Smallest and largest finite positive depth of each kBlock x kBlock block of a source's depth
+/// image, over the samples a pass may use (+inf and 0 where it has none, or where it was not
+/// computed): `all` over the samples outside the exclude mask, `observed` over those also outside
+/// the repaired mask, `repaired` over those inside it. inpaint() skips the source blocks that
+/// cannot reach the mask with it (a block without repaired samples costs its repaired pass
+/// nothing); a caller that keeps its sources computes it once per source.
 struct DepthBlocks {
   static constexpr int kBlock = 16;
+  struct Range {
+    std::vector<float> z_min;
+    std::vector<float> z_max;
+  };
   int blocks_x = 0;
   int blocks_y = 0;
-  std::vector<float> z_min;
-  std::vector<float> z_max;
+  Range all;
+  Range observed;
+  Range repaired;
+  /// The buffers of the masks they were computed with (nullptr: none), which inpaint() checks
+  /// against the SourceView's: blocks computed without the masks would skip samples a pass uses.
+  const void* exclude_data = nullptr;
+  const void* repaired_data = nullptr;
 };
 
-/// DepthBlocks of the whole image.
-DepthBlocks depth_blocks(const cv::Mat& depth_m);
+/// DepthBlocks of the whole image, with the source's exclude and repaired masks (CV_8UC1 of the
+/// depth's size, non-zero = set; either may be empty). The SourceView must hold these same masks
+/// (the same buffers, unchanged since): inpaint() throws ddl::Error for other buffers.
+DepthBlocks depth_blocks(const cv::Mat& depth_m, const cv::Mat& exclude_mask = cv::Mat(),
+                         const cv::Mat& repaired_mask = cv::Mat());
 
 /// A keyframe as a source of background: its pose, images and the pixels not to use.
 struct SourceView {
@@ -90,7 +105,8 @@ struct SourceView {
       exclude_mask;  // CV_8UC1 non-zero = do not use (dynamic pixels left unfilled); may be empty
   /// CV_8UC1 non-zero = this keyframe's own repair filled the pixel (not observed); may be empty.
   cv::Mat repaired_mask;
-  /// depth_blocks(depth_m), when the caller keeps it; otherwise inpaint() computes what it needs.
+  /// depth_blocks(depth_m, exclude_mask, repaired_mask), when the caller keeps it; otherwise
+  /// inpaint() computes what it needs.
   std::shared_ptr<const DepthBlocks> blocks;
 };
 

@@ -156,8 +156,8 @@ void DenseMapper::process(DenseKeyframe item) {
   }
   if (config_.inpainting_enabled && config_.inpainting.skip_unreachable_blocks) {
     // Computed once here instead of in each later repair that uses this keyframe as a source.
-    stored.blocks =
-        std::make_shared<const inpainting::DepthBlocks>(inpainting::depth_blocks(stored.depth_m));
+    stored.blocks = std::make_shared<const inpainting::DepthBlocks>(
+        inpainting::depth_blocks(stored.depth_m, stored.exclude, stored.repaired));
   }
   timings_.record("inpainting", watch.elapsed_ms());
 
