@@ -253,6 +253,46 @@ TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
   EXPECT_GT(red_pixels(unchecked), 500);
 }
 
+// The see-through check skips, per tile, the sources whose observed depth under the tile cannot
+// exceed the nearest vote threshold. Votes just above the threshold, from sources turned against
+// the current camera (so depths in the source and the current camera differ), must survive
+// that: a remnant 14 cm in front of the wall (the threshold is 2 cm + 3% of the depth, about
+// 10.6 cm there) is rejected with depth blocks exactly as without the skip.
+TEST(Inpainting, SeeThroughVotesNearTheThresholdSurviveTheTileSkip) {
+  const auto cam = synthetic::tum3_camera();
+  const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
+  const SE3 T_w_older(Mat3d(Eigen::AngleAxisd(0.14, Vec3d::UnitY())), Vec3d(-0.4, 0.0, 0.0));
+  const SE3 T_w_oldest(Mat3d(Eigen::AngleAxisd(-0.12, Vec3d::UnitX())), Vec3d(-0.2, 0.3, 0.0));
+  const SE3 T_w_cur;
+  View newest = render(cam, T_w_newest, false);
+  paint_red_remnant(newest, 2.86f);
+  const View older = render(cam, T_w_older, false);
+  const View oldest = render(cam, T_w_oldest, false);
+  const View cur = render(cam, T_w_cur, true);
+  const cv::Mat mask = cur.depth < 2.0f;
+  std::vector<SourceView> sources = {{T_w_newest, newest.bgr, newest.depth, {}, {}},
+                                     {T_w_older, older.bgr, older.depth, {}, {}},
+                                     {T_w_oldest, oldest.bgr, oldest.depth, {}, {}}};
+  InpaintingConfig config;
+  config.image_fill_small_holes = false;
+  config.skip_unreachable_blocks = false;  // every source asked for every pixel
+  const auto reference = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  config.see_through_votes = 0;
+  const auto unchecked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  ASSERT_GT(red_pixels(unchecked), 500);
+  ASSERT_LT(red_pixels(reference), red_pixels(unchecked) / 10);  // the votes reject it
+  config = InpaintingConfig{};
+  config.image_fill_small_holes = false;
+  for (SourceView& v : sources) {
+    v.blocks = std::make_shared<const DepthBlocks>(depth_blocks(v.depth_m));
+  }
+  const auto skipped = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
+  EXPECT_EQ(skipped.filled_pixels, reference.filled_pixels);
+  EXPECT_EQ(red_pixels(skipped), red_pixels(reference));
+  EXPECT_EQ(differing(skipped.bgr, reference.bgr), 0);
+  EXPECT_EQ(differing(skipped.depth_m, reference.depth_m), 0);
+}
+
 TEST(Inpainting, SmallHolesAreClosedByTheImageFill) {
   const auto cam = synthetic::tum3_camera();
   const SE3 T_w;
@@ -359,21 +399,59 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
   // size is no multiple of the block size (partial blocks at the right and bottom edges).
   // And with sources repaired everywhere outside their exclude masks: then only the passes over
   // repaired samples fill, whose blocks are bounded by the repaired samples' depths.
+  // And with a remnant in the newest source that its mask missed: the points halfway between the
+  // target's people and the background behind them, painted red into it where it would see them.
+  // It lands behind the target's people, the other sources saw the background through it, and
+  // the see-through check rejects it (the views differ by rotations, so depths in the source and
+  // in the current camera differ).
+  SourceView with_remnant = sources.front();
+  int painted = 0;
+  {
+    with_remnant.bgr = with_remnant.bgr.clone();
+    with_remnant.depth_m = with_remnant.depth_m.clone();
+    with_remnant.exclude_mask = with_remnant.exclude_mask.clone();
+    cv::Mat background_depth;
+    target.background_depth_raw.convertTo(background_depth, CV_32F, 1.0 / cam.depth_factor);
+    const SE3 T_src_cur = with_remnant.T_w_c.inverse() * target.T_w_c;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const float near = target_depth.at<float>(v, u);
+        const float far = background_depth.at<float>(v, u);
+        if (target_mask.at<std::uint8_t>(v, u) == 0 || near <= 0.0f || far < near + 1.0f) continue;
+        const Vec3d p = T_src_cur * cam.unproject(u, v, 0.5 * (near + far));
+        const int us = cvRound(cam.fx * p.x() / p.z() + cam.cx);
+        const int vs = cvRound(cam.fy * p.y() / p.z() + cam.cy);
+        if (p.z() <= 0.3 || us < 0 || vs < 0 || us >= cam.width || vs >= cam.height) continue;
+        float& d = with_remnant.depth_m.at<float>(vs, us);
+        if (d > 0.0f && p.z() >= d) continue;  // hidden in the source
+        d = static_cast<float>(p.z());
+        with_remnant.bgr.at<cv::Vec3b>(vs, us) = {0, 0, 255};
+        with_remnant.exclude_mask.at<std::uint8_t>(vs, us) = 0;
+        with_remnant.repaired_mask.at<std::uint8_t>(vs, us) = 0;
+        ++painted;
+      }
+    }
+  }
+  ASSERT_GT(painted, 2000);
   struct Variant {
     int stride;
     cv::Size size;
     bool all_repaired;
+    bool remnant;
   };
-  for (const auto& [stride, size, all_repaired] :
-       {Variant{1, {640, 480}, false}, Variant{3, {636, 478}, false},
-        Variant{1, {640, 480}, true}}) {
+  for (const auto& [stride, size, all_repaired, remnant] :
+       {Variant{1, {640, 480}, false, false}, Variant{3, {636, 478}, false, false},
+        Variant{1, {640, 480}, true, false}, Variant{1, {640, 480}, false, true}}) {
     SCOPED_TRACE(::testing::Message()
-                 << "stride " << stride << ", " << size << (all_repaired ? ", all repaired" : ""));
+                 << "stride " << stride << ", " << size << (all_repaired ? ", all repaired" : "")
+                 << (remnant ? ", remnant" : ""));
     const cv::Rect crop({0, 0}, size);
     std::vector<SourceView> cropped;
-    for (const SourceView& v : sources) {
-      const cv::Mat repaired =
-          all_repaired ? cv::Mat(cv::Mat(v.exclude_mask == 0)) : v.repaired_mask;
+    for (const SourceView& source_view : sources) {
+      const SourceView& v = remnant && cropped.empty() ? with_remnant : source_view;
+      const cv::Mat repaired = all_repaired ? cv::Mat(cv::Mat(v.exclude_mask == 0))
+                               : remnant ? cv::Mat(cv::Mat::zeros(v.exclude_mask.size(), CV_8UC1))
+                                         : v.repaired_mask;
       cropped.push_back(
           {v.T_w_c, v.bgr(crop), v.depth_m(crop), v.exclude_mask(crop), repaired(crop)});
     }
@@ -381,6 +459,8 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     config.source_stride_px = stride;
     config.num_keyframes = 2;  // and 3 older ones: every pass, the later ones on fewer pixels
     config.extra_keyframes = 3;
+    // One other source sees most of the remnant's place (the views are far apart): one vote.
+    if (remnant) config.see_through_votes = 1;
     const auto skipped = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
                                  target.T_w_c.inverse(), cropped, cam, config);
     // The same with each source's depth blocks computed beforehand (as the dense stage keeps them).
@@ -395,6 +475,15 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     const auto every = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
                                target.T_w_c.inverse(), cropped, cam, config);
     ASSERT_GT(every.filled_pixels, 2000);
+    // The see-through check rejects pixels of the remnant, whether it skips sources per tile
+    // (`skipped`, `kept`) or asks every one (`every`).
+    if (remnant) {
+      config.see_through_votes = 0;
+      const auto unchecked = inpaint(target.rgb(crop), target_depth(crop), target_mask(crop),
+                                     target.T_w_c.inverse(), cropped, cam, config);
+      EXPECT_GT(unchecked.filled_pixels - every.filled_pixels, 100);  // the check's rejections
+      EXPECT_LT(red_pixels(every), red_pixels(unchecked) - 100);
+    }
     EXPECT_EQ(skipped.filled_pixels, every.filled_pixels);
     EXPECT_EQ(differing(skipped.bgr, every.bgr), 0);
     EXPECT_EQ(differing(skipped.depth_m, every.depth_m), 0);
@@ -409,14 +498,16 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
   // Depth blocks of another image size are an error, not a silently wrong skip.
   std::vector<SourceView> foreign = sources;
   cv::Mat small_depth;
-  cv::resize(foreign[0].depth_m, small_depth, {320, 240}, 0, 0, cv::INTER_NEAREST);
-  foreign[0].blocks = std::make_shared<const DepthBlocks>(depth_blocks(small_depth));
+  cv::resize(foreign.back().depth_m, small_depth, {320, 240}, 0, 0, cv::INTER_NEAREST);
+  foreign.back().blocks = std::make_shared<const DepthBlocks>(depth_blocks(small_depth));
   EXPECT_THROW(inpaint(target.rgb, target_depth, target_mask, target.T_w_c.inverse(), foreign, cam,
                        InpaintingConfig{}),
                Error);
   // So are blocks computed without the source's masks: they would skip its repaired samples.
+  // (On the oldest source: the passes may stop before it, the see-through check reads it.)
   std::vector<SourceView> maskless = sources;
-  maskless[0].blocks = std::make_shared<const DepthBlocks>(depth_blocks(maskless[0].depth_m));
+  maskless.back().blocks =
+      std::make_shared<const DepthBlocks>(depth_blocks(maskless.back().depth_m));
   EXPECT_THROW(inpaint(target.rgb, target_depth, target_mask, target.T_w_c.inverse(), maskless, cam,
                        InpaintingConfig{}),
                Error);

@@ -148,11 +148,11 @@ cv::Rect source_window(const cv::Rect& target_box, const SE3& T_src_cur,
 }
 
 /// Source blocks of kCullBlock x kCullBlock pixels (aligned to the image origin) whose samples
-/// cannot land in the reach mask are skipped without projecting each pixel. A block's samples
-/// lie, in the source camera, inside the frustum through its pixel rectangle between the
-/// smallest and the largest depth measured in it, so projected_frustum_box bounds every sample's
-/// target pixel. A block whose box holds no reach pixel is skipped: the splatted result is the
-/// same, sample for sample and in the same order.
+/// cannot land in the reach mask are skipped without projecting each pixel. The samples of a block
+/// a pass uses lie, in the source camera, inside the frustum through its pixel rectangle between
+/// the smallest and the largest depth of those samples, so projected_frustum_box bounds every
+/// sample's target pixel. A block whose box holds no reach pixel is skipped: the splatted result is
+/// the same, sample for sample and in the same order.
 constexpr int kCullBlock = DepthBlocks::kBlock;
 
 /// DepthBlocks over the blocks that overlap `window` (the others are left without depth), of the
@@ -246,11 +246,12 @@ std::vector<std::uint8_t> active_blocks(const DepthBlocks::Range& range, int blo
 /// by more than the tolerance) was empty space when they were taken, so it is a piece of a moving
 /// object that its source's mask missed; the pixel is left unfilled (the original frame's values
 /// come back). Static background is never seen through, except across depth edges within pose
-/// and depth error, hence more than one vote. The pixels are taken in tiles of kCullBlock x
-/// kCullBlock; a source that cannot vote for any pixel of a tile is not asked for each: the
-/// tile's filled points (between their smallest and largest depth) land outside its image, or
-/// nothing it observed there (its DepthBlocks, when given) lies farther than the nearest of them
-/// by the tolerance. The votes, and so the result, are the same.
+/// and depth error, hence more than one vote. Only a finite, positive source depth votes. The
+/// pixels are taken in tiles of kCullBlock x kCullBlock; with skip_unreachable_blocks a source
+/// that cannot vote for any pixel of a tile is not asked for each: the tile's filled points
+/// (between their smallest and largest depth) land outside its image, or nothing it observed
+/// there (its DepthBlocks, when given) lies farther than the nearest of them by the tolerance.
+/// The votes, and so the result, are the same.
 void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::Mat& winner,
                          const cv::Mat& bgr, const cv::Mat& depth_m, const SE3& T_c_w,
                          const std::vector<SourceView>& sources, std::size_t count,
@@ -280,6 +281,10 @@ void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::M
       candidates.clear();
       for (std::size_t s = 0; s < count; ++s) {
         const SourceView& src = sources[s];
+        if (!config.skip_unreachable_blocks) {  // every source asked for every pixel
+          candidates.push_back(s);
+          continue;
+        }
         double z_near = 0.0;
         const std::optional<cv::Rect> box =
             projected_frustum_box(tx, ty, tx1 - 1, ty1 - 1, z_lo, z_hi, T_src_cur[s].rotation(),
@@ -448,6 +453,24 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
   } else {
     passes = {{0, newest, Take::kAny}, {newest, count, Take::kAny}};
   }
+  // Every source used, also those the passes do not reach (the see-through check reads them all).
+  for (std::size_t s = 0; s < count; ++s) {
+    const SourceView& src = sources[s];
+    if (src.bgr.type() != CV_8UC3 || src.depth_m.type() != CV_32FC1 ||
+        src.bgr.size() != src.depth_m.size()) {
+      throw Error("inpaint: a source needs CV_8UC3 colour and CV_32FC1 depth of one size");
+    }
+    for (const cv::Mat* m : {&src.exclude_mask, &src.repaired_mask}) {
+      if (!m->empty() && (m->type() != CV_8UC1 || m->size() != src.depth_m.size())) {
+        throw Error("inpaint: a source's masks must be CV_8UC1 of its depth's size (or empty)");
+      }
+    }
+    if (src.blocks && !matches(*src.blocks, src)) {
+      throw Error(
+          "inpaint: a source's depth blocks were not computed for its depth image's size and "
+          "its masks");
+    }
+  }
   cv::Mat locked;  // target pixels filled by an earlier pass
   struct CachedRange {
     cv::Rect window;
@@ -468,16 +491,6 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     for (std::size_t s = passes[pass].begin; s < passes[pass].end; ++s) {
       const SourceView& src = sources[s];
       if (take == Take::kRepaired && src.repaired_mask.empty()) continue;
-      for (const cv::Mat* m : {&src.exclude_mask, &src.repaired_mask}) {
-        if (!m->empty() && (m->type() != CV_8UC1 || m->size() != src.depth_m.size())) {
-          throw Error("inpaint: a source's masks must be CV_8UC1 of its depth's size (or empty)");
-        }
-      }
-      if (src.blocks && !matches(*src.blocks, src)) {
-        throw Error(
-            "inpaint: a source's depth blocks were not computed for its depth image's size and "
-            "its masks");
-      }
       const SE3 T_cur_src = T_c_w * src.T_w_c;
       const Mat3d R = T_cur_src.rotation();
       const Vec3d t = T_cur_src.translation();

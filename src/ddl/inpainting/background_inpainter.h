@@ -60,8 +60,9 @@ struct InpaintingConfig {
   /// source's mask missed, and is left unfilled. 0 = off.
   int see_through_votes = 2;
   /// Skip source blocks of 16 x 16 pixels that cannot reach the mask (bounded by their depth
-  /// range), instead of projecting every pixel: the result is the same, sample for sample; false
-  /// is for checking that (tests/inpainting) and for timing it.
+  /// range), instead of projecting every pixel, and in the see-through check the sources that
+  /// cannot vote for a 16 x 16 tile: the result is the same, sample for sample and vote for vote;
+  /// false is for checking that (tests/inpainting) and for timing it.
   bool skip_unreachable_blocks = true;
 
   /// Throws ddl::ConfigError naming "dense.inpainting.<field>" (its place in the settings).
