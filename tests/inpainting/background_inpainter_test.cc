@@ -210,24 +210,42 @@ TEST(Inpainting, SamplesAtTheMaskedSurfacesOwnDepthAreRejected) {
   EXPECT_GT(grey_pixels(any_depth), 5000);
 }
 
+// The scene of the see-through tests: the current frame at the origin (the person at 1.5 m
+// before the wall at 3 m, masked) and three keyframes of the wall; the newest, at x = 0.3 m,
+// observed a red remnant at `remnant_depth_m` that its mask missed.
+struct SeeThroughScene {
+  View cur;
+  cv::Mat mask;
+  std::vector<SourceView> sources;  // newest first
+};
+
+SeeThroughScene see_through_scene(const camera::PinholeCamera& cam, const SE3& T_w_older,
+                                  const SE3& T_w_oldest, float remnant_depth_m) {
+  const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
+  View newest = render(cam, T_w_newest, false);
+  paint_red_remnant(newest, remnant_depth_m);
+  const View older = render(cam, T_w_older, false);
+  const View oldest = render(cam, T_w_oldest, false);
+  SeeThroughScene scene{render(cam, SE3(), true), cv::Mat(), {}};
+  scene.mask = scene.cur.depth < 2.0f;
+  scene.sources = {{T_w_newest, newest.bgr, newest.depth, {}, {}},
+                   {T_w_older, older.bgr, older.depth, {}, {}},
+                   {T_w_oldest, oldest.bgr, oldest.depth, {}, {}}};
+  return scene;
+}
+
 // The newest keyframe observed a remnant its mask missed (red, 2 m: behind the current person and
 // in front of the wall, like the other walker of a crossing), and two other keyframes saw the wall
 // through the place where it was. It was gone by then, so the multi-view check rejects it.
 TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
   const auto cam = synthetic::tum3_camera();
-  const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
-  const SE3 T_w_older(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0));
-  const SE3 T_w_oldest(Mat3d::Identity(), Vec3d(-0.2, 0.3, 0.0));
   const SE3 T_w_cur;
-  View newest = render(cam, T_w_newest, false);
-  paint_red_remnant(newest, 2.0f);
-  const View older = render(cam, T_w_older, false);
-  const View oldest = render(cam, T_w_oldest, false);
-  const View cur = render(cam, T_w_cur, true);
-  const cv::Mat mask = cur.depth < 2.0f;
-  const std::vector<SourceView> sources = {{T_w_newest, newest.bgr, newest.depth, {}, {}},
-                                           {T_w_older, older.bgr, older.depth, {}, {}},
-                                           {T_w_oldest, oldest.bgr, oldest.depth, {}, {}}};
+  const SeeThroughScene scene =
+      see_through_scene(cam, SE3(Mat3d::Identity(), Vec3d(-0.4, 0.0, 0.0)),
+                        SE3(Mat3d::Identity(), Vec3d(-0.2, 0.3, 0.0)), 2.0f);
+  const View& cur = scene.cur;
+  const cv::Mat& mask = scene.mask;
+  const std::vector<SourceView>& sources = scene.sources;
   InpaintingConfig config;
   config.image_fill_small_holes = false;
   const auto checked = inpaint(cur.bgr, cur.depth, mask, T_w_cur.inverse(), sources, cam, config);
@@ -260,19 +278,13 @@ TEST(Inpainting, ContentOtherKeyframesSawThroughIsRejected) {
 // 10.6 cm there) is rejected with depth blocks exactly as without the skip.
 TEST(Inpainting, SeeThroughVotesNearTheThresholdSurviveTheTileSkip) {
   const auto cam = synthetic::tum3_camera();
-  const SE3 T_w_newest(Mat3d::Identity(), Vec3d(0.3, 0.0, 0.0));
-  const SE3 T_w_older(Mat3d(Eigen::AngleAxisd(0.14, Vec3d::UnitY())), Vec3d(-0.4, 0.0, 0.0));
-  const SE3 T_w_oldest(Mat3d(Eigen::AngleAxisd(-0.12, Vec3d::UnitX())), Vec3d(-0.2, 0.3, 0.0));
   const SE3 T_w_cur;
-  View newest = render(cam, T_w_newest, false);
-  paint_red_remnant(newest, 2.86f);
-  const View older = render(cam, T_w_older, false);
-  const View oldest = render(cam, T_w_oldest, false);
-  const View cur = render(cam, T_w_cur, true);
-  const cv::Mat mask = cur.depth < 2.0f;
-  std::vector<SourceView> sources = {{T_w_newest, newest.bgr, newest.depth, {}, {}},
-                                     {T_w_older, older.bgr, older.depth, {}, {}},
-                                     {T_w_oldest, oldest.bgr, oldest.depth, {}, {}}};
+  SeeThroughScene scene = see_through_scene(
+      cam, SE3(Mat3d(Eigen::AngleAxisd(0.14, Vec3d::UnitY())), Vec3d(-0.4, 0.0, 0.0)),
+      SE3(Mat3d(Eigen::AngleAxisd(-0.12, Vec3d::UnitX())), Vec3d(-0.2, 0.3, 0.0)), 2.86f);
+  const View& cur = scene.cur;
+  const cv::Mat& mask = scene.mask;
+  std::vector<SourceView>& sources = scene.sources;
   InpaintingConfig config;
   config.image_fill_small_holes = false;
   config.skip_unreachable_blocks = false;  // every source asked for every pixel
