@@ -260,6 +260,10 @@ void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::M
   for (std::size_t s = 0; s < count; ++s) {
     T_src_cur.push_back(sources[s].T_w_c.inverse() * T_c_w.inverse());
   }
+  // Two depths count as one surface within this (the z-buffer's tolerance).
+  auto tolerance = [&](double z) {
+    return config.depth_tolerance_m + config.depth_tolerance_rel * z;
+  };
   std::vector<std::size_t> candidates;
   candidates.reserve(count);
   for (int ty = 0; ty < out.filled.rows; ty += kCullBlock) {
@@ -305,9 +309,10 @@ void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::M
                     blocks.observed.z_max[static_cast<std::size_t>(by) * blocks.blocks_x + bx]);
               }
             }
-            const double threshold = std::max(z_near, kMinSampleDepth) + config.depth_tolerance_m +
-                                     config.depth_tolerance_rel * std::max(z_near, 0.0);
-            if (farthest < threshold - 1e-4) continue;
+            // A voter's point lies at least this deep in the source (the frustum's nearest
+            // corner, and a vote needs kMinSampleDepth).
+            const double z_vote = std::max(z_near, kMinSampleDepth);
+            if (farthest < z_vote + tolerance(z_vote) - 1e-4) continue;
           }
         }
         candidates.push_back(s);
@@ -338,8 +343,8 @@ void reject_seen_through(InpaintingResult& out, const cv::Mat& zbuf, const cv::M
               continue;
             }
             const float d = src.depth_m.at<float>(v, u);
-            const double tol = config.depth_tolerance_m + config.depth_tolerance_rel * p.z();
-            if (d > 0.0f && d < std::numeric_limits<float>::infinity() && d > p.z() + tol) {
+            if (d > 0.0f && d < std::numeric_limits<float>::infinity() &&
+                d > p.z() + tolerance(p.z())) {
               ++votes;  // a finite depth only, as the blocks bound (none is infinite from a sensor)
             }
           }
