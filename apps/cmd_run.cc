@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "cli_support.h"
@@ -21,12 +22,34 @@
 #include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/pipeline/sequence_runner.h"
 #include "ddl/pipeline/system.h"
+#include "ddl/viewer/viewer.h"
 #include "ddl/vocabulary/vocabulary.h"
 #include "run_command.h"
 
 namespace ddl::app {
 namespace {
 namespace fs = std::filesystem;
+
+// What the viewer shows of a processed frame.
+viewer::ViewFrame to_view_frame(const io::RgbdFrame& frame, const pipeline::FrameOutcome& outcome,
+                                std::size_t keyframes_created) {
+  viewer::ViewFrame view;
+  view.index = frame.index;
+  view.timestamp_s = frame.timestamp_s;
+  view.rgb = frame.rgb;
+  view.cnn = outcome.masks.cnn;
+  view.geometry = outcome.masks.geometry;
+  view.memory = outcome.masks.memory;
+  view.keypoints.reserve(outcome.tracking.keypoints.size());
+  for (const tracking::KeypointStatus& k : outcome.tracking.keypoints) {
+    view.keypoints.push_back({cv::Point2f(k.u, k.v), k.matched});
+  }
+  view.state = std::string(tracking::to_string(outcome.tracking.state));
+  view.T_w_c = outcome.tracking.T_w_c;
+  view.keyframes = keyframes_created;
+  view.map_reset = outcome.tracking.map_reset;
+  return view;
+}
 
 }  // namespace
 
@@ -74,6 +97,20 @@ RunResult run_sequence_command(const RunArgs& args,
                                std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
                                const std::atomic<bool>* stop) {
   const pipeline::SystemConfig config = make_system_config(args);
+  // The viewer's settings are checked before anything is loaded.
+  std::optional<viewer::ViewerConfig> view_config;
+  if (args.viewer || !args.save_viewer_dir.empty()) {
+    view_config.emplace();
+    view_config->window = args.viewer;
+    view_config->output_dir = args.save_viewer_dir;
+    view_config->every_n_frames = args.viewer_every;
+    try {
+      view_config->validate();
+    } catch (const ConfigError& e) {
+      throw ConfigError(fmt::format("--viewer-every / --save-viewer: {}", e.what()));
+    }
+    if (args.viewer && !viewer::display_available()) throw viewer::no_display_error();
+  }
 
   io::DatasetOptions dataset_options;
   dataset_options.kind = io::parse_dataset_kind(args.dataset_kind, "--dataset-kind");
@@ -117,6 +154,15 @@ RunResult run_sequence_command(const RunArgs& args,
     mask_evaluator = pipeline::MaskEvaluator::open(args.sequence, *dataset_options.camera);
   }
   run_options.mask_evaluator = mask_evaluator.get();
+  std::unique_ptr<viewer::Viewer> view;
+  if (view_config) {
+    view = std::make_unique<viewer::Viewer>(*view_config, system.map());
+    run_options.on_frame = [&](const io::RgbdFrame& frame, const pipeline::FrameOutcome& result) {
+      view->show(to_view_frame(frame, result, system.statistics().keyframes_created));
+      if (view->stop_requested()) spdlog::info("viewer: stop requested in the window");
+      return !view->stop_requested();
+    };
+  }
   Progress progress("run " + dataset->name(),
                     std::min(dataset->size() - std::min(dataset->size(), args.first_frame),
                              args.max_frames == 0 ? dataset->size() : args.max_frames));
@@ -124,6 +170,11 @@ RunResult run_sequence_command(const RunArgs& args,
       *dataset, system, run_options, stop,
       [&](std::size_t done, std::size_t, const std::string& note) { progress.update(done, note); });
   progress.finish();
+  if (view) {
+    view->finish();
+    spdlog::info("viewer: {} views drawn{}", view->frames_drawn(),
+                 args.save_viewer_dir.empty() ? "" : " to " + args.save_viewer_dir);
+  }
   return {outcome.interrupted, outcome.summary};
 }
 
@@ -215,6 +266,16 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--save-inpainted", args->save_inpainted,
                 "Write repaired keyframes to <out>/inpainted/");
   cmd->add_flag("--no-eval", args->no_eval, "Skip the evaluation against groundtruth.txt");
+  cmd->add_flag("--viewer", args->viewer,
+                "Show the viewer window: the frame with its dynamic masks and keypoints beside "
+                "the map (needs a display; 'q' or Esc stops the run cleanly). See docs/viewer.md");
+  cmd->add_option("--save-viewer", args->save_viewer_dir,
+                  "Write the viewer's images to DIR (frame_NNNNNN.png; every drawn frame, so a "
+                  "deterministic run gives the same images)");
+  cmd->add_option("--viewer-every", args->viewer_every,
+                  "Draw only the frames whose index is a multiple of N")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->callback([args, &exit_code] { exit_code = run_guarded([&] { return run(*args); }); });
 }
 

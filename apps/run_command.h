@@ -33,6 +33,9 @@ struct RunArgs {
   bool save_masks = false;
   bool save_inpainted = false;
   std::string segmentation;
+  bool viewer = false;          // --viewer: the viewer window
+  std::string save_viewer_dir;  // --save-viewer DIR: the viewer's images
+  int viewer_every = 1;         // --viewer-every N
 };
 
 struct RunResult {

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
@@ -338,6 +339,58 @@ TEST_F(Bench, TheTrackedRatioCountsOnlyFramesInsideTheGroundTruth) {
   ASSERT_EQ(summary["frames_processed"].get<int>(), 40);
   ASSERT_EQ(summary["statistics"]["frames_tracked"].get<int>(), 40) << "the premise: all tracked";
   EXPECT_NEAR(summary["evaluation"]["tracked_ratio"].get<double>(), 1.0, 1e-9);
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+// The viewer only reads: a deterministic run writes the same trajectory with and without it, and
+// its images are the frames asked for, both panels side by side.
+TEST_F(Bench, TheViewerDrawsTheFramesAskedForAndChangesNoTrajectory) {
+  const std::string run =
+      std::string("'") + DDL_SLAM_BINARY + "' --log-level warn run --shared-dir '" + shared_dir() +
+      "' '" + (*root_ / "walk").string() + "' --max-frames 20 --no-octomap --no-inpainting --out ";
+  const fs::path plain = *root_ / "viewer_off";
+  const fs::path viewed = *root_ / "viewer_on";
+  ASSERT_EQ(run_shell(run + "'" + plain.string() + "'", *root_ / "viewer_off.log"), 0);
+  std::string log;
+  ASSERT_EQ(run_shell(run + "'" + viewed.string() + "' --save-viewer '" +
+                          (viewed / "view").string() + "' --viewer-every 5",
+                      *root_ / "viewer_on.log", &log),
+            0)
+      << log;
+  const std::string trajectory = read_text(plain / "CameraTrajectory.txt");
+  EXPECT_FALSE(trajectory.empty());
+  EXPECT_EQ(trajectory, read_text(viewed / "CameraTrajectory.txt"));
+  std::size_t images = 0;
+  for (const auto& entry : fs::directory_iterator(viewed / "view")) {
+    ++images;
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "frame_000000.png" || name == "frame_000005.png" ||
+                name == "frame_000010.png" || name == "frame_000015.png")
+        << name;
+    const cv::Mat image = cv::imread(entry.path().string());
+    ASSERT_FALSE(image.empty()) << name;
+    EXPECT_EQ(image.cols, 320 + 640) << name;  // the 320x240 frame, the map panel
+    EXPECT_EQ(image.rows, 240 + 28) << name;   // and the status bar
+  }
+  EXPECT_EQ(images, 4u);
+}
+
+TEST_F(Bench, TheViewerWindowWithoutADisplayStopsBeforeTheRun) {
+  std::string log;
+  const fs::path out = *root_ / "viewer_no_display";
+  const std::string command =
+      std::string("env -u DISPLAY -u WAYLAND_DISPLAY -u QT_QPA_PLATFORM '") + DDL_SLAM_BINARY +
+      "' --log-level warn run --shared-dir '" + shared_dir() + "' '" + (*root_ / "walk").string() +
+      "' --viewer --out '" + out.string() + "'";
+  EXPECT_EQ(run_shell(command, *root_ / "viewer_no_display.log", &log), 1);
+  EXPECT_NE(log.find("needs a display"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(out / "CameraTrajectory.txt"));
 }
 
 }  // namespace

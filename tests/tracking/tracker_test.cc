@@ -86,6 +86,25 @@ TEST(TrackerTest, TracksSyntheticSequenceWithMapFromTrackerOnly) {
   EXPECT_EQ(run.map->keyframe_count(), run.keyframes_created);
 }
 
+TEST(TrackerTest, KeypointStatusesAreTheFramesKeypointsAndItsInlierMatches) {
+  const SequenceRun run = track_sequence(20, /*associate=*/true, testing::test_tracker_config());
+  for (const TrackingResult& r : run.results) {
+    ASSERT_EQ(r.keypoints.size(), r.num_features) << "frame " << r.frame_index;
+    const auto matched = static_cast<int>(std::count_if(
+        r.keypoints.begin(), r.keypoints.end(), [](const KeypointStatus& k) { return k.matched; }));
+    // A new keyframe also gives the frame its new close points (ORB-SLAM2 CreateNewKeyFrame).
+    if (r.new_keyframe == nullptr) {
+      EXPECT_EQ(matched, r.num_inliers) << "frame " << r.frame_index;
+    } else {
+      EXPECT_GE(matched, r.num_inliers) << "frame " << r.frame_index;
+    }
+    const camera::PinholeCamera camera = testing::test_camera();
+    for (const KeypointStatus& k : r.keypoints) {
+      ASSERT_TRUE(k.u >= 0.0f && k.u < camera.width && k.v >= 0.0f && k.v < camera.height);
+    }
+  }
+}
+
 TEST(TrackerTest, TracksSyntheticSequenceWithKeyframeAssociation) {
   const SequenceRun run = track_sequence(40, /*associate=*/true, testing::test_tracker_config());
   expect_accurate(run, 40);

@@ -110,10 +110,15 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       const FrameOutcome result = system.process(*frame, std::move(segmented->cnn));
       if (masks != nullptr) masks->add(*frame, result.masks);
       ++done;
+      const bool go_on = !options.on_frame || options.on_frame(*frame, result);
       if (progress) {
         progress(done, total,
                  fmt::format("{} kf, {}", system.statistics().keyframes_created,
                              tracking::to_string(result.tracking.state)));
+      }
+      if (!go_on) {
+        outcome.interrupted = true;
+        break;
       }
     }
     caller_cpu_s = (thread_cpu_ms() - caller_cpu_start_ms) / 1000.0;

@@ -29,6 +29,9 @@ struct RunOptions {
   /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
   /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).
   MaskEvaluator* mask_evaluator = nullptr;
+  /// When set: called from the calling thread with every frame and what process() reported
+  /// (a viewer, say). Returning false stops the run after that frame, like `stop`.
+  std::function<bool(const io::RgbdFrame&, const FrameOutcome&)> on_frame;
 };
 
 struct RunOutcome {

@@ -139,6 +139,16 @@ TrackingResult Tracker::track(Frame frame, const MappingStatus& mapping) {
   result.num_features = frame.size();
 
   map_->read_consistent([&] { track_locked(frame, mapping, result); });
+  const map::FrameFeatures& features = frame.features();
+  result.keypoints.resize(frame.size());
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    KeypointStatus& k = result.keypoints[i];
+    k.u = features.keypoints[i].pt.x;
+    k.v = features.keypoints[i].pt.y;
+    // Outliers were cleared from the slots of a tracked frame; a lost frame's slots hold the
+    // matches of the attempt that failed.
+    k.matched = result.tracked() && frame.map_point(i) != nullptr;
+  }
   last_frame_ = std::move(frame);
   // The whole tracking work of the frame, also what prepare_frame() and low_cost_pose() did.
   result.timings.total_ms = total.elapsed_ms() + prepared_.features_ms +

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "ddl/core/se3.h"
 #include "ddl/map/keyframe.h"
@@ -51,6 +52,13 @@ struct TrackingTimings {
   double total_ms = 0.0;             // the whole call
 };
 
+/// One keypoint of a frame as tracking left it (for display: the viewer).
+struct KeypointStatus {
+  float u = 0.0f;  // undistorted level-0 pixel
+  float v = 0.0f;
+  bool matched = false;  // an inlier match of a map point in the final pose (tracked frames only)
+};
+
 struct TrackingResult {
   std::size_t frame_index = 0;  // io::RgbdFrame::index
   double timestamp_s = 0.0;
@@ -65,6 +73,8 @@ struct TrackingResult {
   bool map_reset = false;  // tracking was lost with too few keyframes and cleared the map and the
                            // keyframe database: local mapping / loop closing must reset too
   TrackingTimings timings;
+  std::vector<KeypointStatus> keypoints;  // every keypoint tracking used (outside the dynamic
+                                          // masks), in the frame's order
 
   bool tracked() const {
     return state == TrackingState::kOk || state == TrackingState::kRelocalized;

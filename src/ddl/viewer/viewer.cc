@@ -1,0 +1,171 @@
+#include "ddl/viewer/viewer.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/highgui.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <system_error>
+
+#include "ddl/core/error.h"
+#include "ddl/viewer/frame_drawer.h"
+
+namespace fs = std::filesystem;
+
+namespace ddl::viewer {
+namespace {
+
+constexpr const char* kWindowName = "DDL-SLAM";
+
+}  // namespace
+
+bool display_available() {
+  for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"}) {
+    const char* value = std::getenv(name);
+    if (value != nullptr && value[0] != '\0') return true;
+  }
+  return false;
+}
+
+Error no_display_error() {
+  return Error(
+      "the viewer window needs a display, and none of DISPLAY, WAYLAND_DISPLAY and "
+      "QT_QPA_PLATFORM is set (write the views as images with --save-viewer DIR instead)");
+}
+
+void ViewerConfig::validate() const {
+  if (!window && output_dir.empty()) {
+    throw ConfigError::for_key("output_dir", "the viewer needs a window or an output folder");
+  }
+  if (every_n_frames < 1) throw ConfigError::for_key("every_n_frames", "must be >= 1");
+  if (map_width_px < 16) throw ConfigError::for_key("map_width_px", "must be >= 16");
+  if (!(map_focal_px > 0.0)) throw ConfigError::for_key("map_focal_px", "must be > 0");
+  if (!(viewpoint_back_m >= 0.0)) throw ConfigError::for_key("viewpoint_back_m", "must be >= 0");
+  if (!(viewpoint_up_m >= 0.0)) throw ConfigError::for_key("viewpoint_up_m", "must be >= 0");
+  if (viewpoint_back_m == 0.0 && viewpoint_up_m == 0.0) {
+    throw ConfigError::for_key("viewpoint_back_m",
+                               "the view's eye must be away from the camera (back or up > 0)");
+  }
+  if (queue_capacity < 1) throw ConfigError::for_key("queue_capacity", "must be >= 1");
+}
+
+cv::Mat compose_view(const ViewFrame& frame, const MapSnapshot& map, const ViewerConfig& config) {
+  const cv::Mat frame_panel = draw_frame(frame);
+  MapView view;
+  view.width = config.map_width_px;
+  view.height = frame_panel.rows;
+  view.focal_px = config.map_focal_px;
+  // Without a pose (lost, not initialised) the view stays at the last keyframe, else the origin.
+  SE3 anchor_T_w_c;
+  if (frame.T_w_c) {
+    anchor_T_w_c = *frame.T_w_c;
+  } else if (!map.keyframes_T_w_c.empty()) {
+    anchor_T_w_c = map.keyframes_T_w_c.back();
+  }
+  view.T_v_w = follow_view(anchor_T_w_c, config.viewpoint_back_m, config.viewpoint_up_m);
+  cv::Mat view_image;
+  cv::hconcat(frame_panel, draw_map(map, frame.T_w_c, view), view_image);
+  return view_image;
+}
+
+Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
+    : config_(config),
+      map_(std::move(map)),
+      lossless_(!config.output_dir.empty()),
+      queue_(config.queue_capacity) {
+  config_.validate();
+  if (map_ == nullptr) throw Error("Viewer: no map given");
+  if (config_.window && !display_available()) throw no_display_error();
+  if (!config_.output_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(config_.output_dir, ec);
+    if (ec || !fs::is_directory(config_.output_dir)) {
+      throw InputError::at(config_.output_dir, "cannot create the viewer's output folder: " +
+                                                   (ec ? ec.message() : "not a folder"));
+    }
+  }
+  thread_ = std::thread([this] { run(); });
+}
+
+Viewer::~Viewer() {
+  try {
+    finish();
+  } catch (const std::exception& e) {
+    spdlog::error("viewer: {}", e.what());
+  }
+}
+
+void Viewer::show(ViewFrame frame) {
+  rethrow_error();
+  if (finished_) throw Error("Viewer::show after finish()");
+  if (frame.index % static_cast<std::size_t>(config_.every_n_frames) != 0) return;
+  Item item{std::move(frame), std::nullopt};
+  if (lossless_) {
+    item.map = snapshot_map(*map_);
+    if (!queue_.push(std::move(item))) rethrow_error();
+  } else if (!queue_.try_push(std::move(item))) {
+    ++dropped_;
+  }
+}
+
+void Viewer::finish() {
+  if (finished_) return;
+  finished_ = true;
+  queue_.close();
+  if (thread_.joinable()) thread_.join();
+  if (dropped_ > 0) spdlog::info("viewer: {} frames dropped (it fell behind)", dropped_);
+  rethrow_error();
+}
+
+void Viewer::rethrow_error() {
+  std::lock_guard lock(error_mutex_);
+  if (error_) {
+    std::exception_ptr error = error_;
+    error_ = nullptr;
+    std::rethrow_exception(error);
+  }
+}
+
+void Viewer::run() {
+  bool window_open = false;
+  try {
+    while (std::optional<Item> item = queue_.pop()) {
+      const MapSnapshot map = item->map ? std::move(*item->map) : snapshot_map(*map_);
+      const cv::Mat view = compose_view(item->frame, map, config_);
+      if (!config_.output_dir.empty()) {
+        const fs::path path =
+            fs::path(config_.output_dir) / fmt::format("frame_{:06d}.png", item->frame.index);
+        if (!cv::imwrite(path.string(), view)) {
+          throw InputError::at(path.string(), "cannot write the viewer image");
+        }
+      }
+      if (config_.window) {
+        if (!window_open) {
+          cv::namedWindow(kWindowName, cv::WINDOW_AUTOSIZE);
+          window_open = true;
+        }
+        cv::imshow(kWindowName, view);
+        const int key = cv::waitKey(1);
+        if (key == 'q' || key == 'Q' || key == 27) stop_requested_ = true;
+      }
+      ++drawn_;
+    }
+  } catch (...) {
+    {
+      std::lock_guard lock(error_mutex_);
+      error_ = std::current_exception();
+    }
+    queue_.close();
+  }
+  if (window_open) {
+    try {
+      cv::destroyWindow(kWindowName);
+    } catch (const cv::Exception& e) {
+      spdlog::warn("viewer: closing the window failed: {}", e.what());
+    }
+  }
+}
+
+}  // namespace ddl::viewer

@@ -1,0 +1,318 @@
+// The viewer: what the frame and map panels draw where, and the viewer thread's image output.
+
+#include "ddl/viewer/viewer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "ddl/core/error.h"
+#include "ddl/map/map.h"
+#include "ddl/viewer/frame_drawer.h"
+#include "ddl/viewer/map_drawer.h"
+
+namespace ddl::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+
+ViewFrame grey_frame(std::size_t index = 0) {
+  ViewFrame frame;
+  frame.index = index;
+  frame.rgb = cv::Mat(120, 160, CV_8UC3, cv::Scalar::all(100));
+  frame.state = "OK";
+  return frame;
+}
+
+cv::Vec3b pixel(const cv::Mat& image, int x, int y) { return image.at<cv::Vec3b>(y, x); }
+
+TEST(FrameDrawer, MasksAreTintedByThePartThatMarkedThem) {
+  ViewFrame frame = grey_frame();
+  frame.cnn = cv::Mat::zeros(120, 160, CV_8UC1);
+  frame.geometry = cv::Mat::zeros(120, 160, CV_8UC1);
+  frame.memory = cv::Mat::zeros(120, 160, CV_8UC1);
+  frame.cnn(cv::Rect(10, 10, 20, 20)).setTo(255);
+  frame.geometry(cv::Rect(20, 20, 30, 30)).setTo(255);  // overlaps the CNN mask
+  frame.memory(cv::Rect(100, 60, 10, 10)).setTo(255);
+  const cv::Mat panel = draw_frame(frame, 0.5);
+  ASSERT_EQ(panel.cols, 160);
+  ASSERT_EQ(panel.rows, 120 + kStatusBarPx);
+  // CNN red: (100, 100, 100) halfway to (0, 0, 255).
+  EXPECT_EQ(pixel(panel, 12, 12), cv::Vec3b(50, 50, 178));
+  // Where CNN and geometry overlap, the CNN's tint, once.
+  EXPECT_EQ(pixel(panel, 25, 25), cv::Vec3b(50, 50, 178));
+  // Geometry yellow, memory magenta, elsewhere untouched.
+  EXPECT_EQ(pixel(panel, 45, 45), cv::Vec3b(50, 178, 178));
+  EXPECT_EQ(pixel(panel, 105, 65), cv::Vec3b(178, 50, 178));
+  EXPECT_EQ(pixel(panel, 80, 100), cv::Vec3b(100, 100, 100));
+}
+
+TEST(FrameDrawer, KeypointsShowWhetherTheyMatchedAMapPoint) {
+  ViewFrame frame = grey_frame();
+  frame.keypoints = {{cv::Point2f(40.0f, 60.0f), true}, {cv::Point2f(120.0f, 60.0f), false}};
+  const cv::Mat panel = draw_frame(frame);
+  EXPECT_EQ(pixel(panel, 40, 60), cv::Vec3b(0, 255, 0));     // matched: green
+  EXPECT_EQ(pixel(panel, 120, 60), cv::Vec3b(255, 128, 0));  // unmatched: blue
+  EXPECT_EQ(pixel(panel, 80, 60), cv::Vec3b(100, 100, 100));
+  // The status line writes into the bar below the image.
+  const cv::Mat bar = panel(cv::Rect(0, 120, 160, kStatusBarPx));
+  cv::Mat grey;
+  cv::extractChannel(bar, grey, 0);
+  EXPECT_GT(cv::countNonZero(grey), 20);
+}
+
+TEST(FrameDrawer, BadInputIsAnError) {
+  ViewFrame frame = grey_frame();
+  frame.cnn = cv::Mat::zeros(60, 80, CV_8UC1);
+  EXPECT_THROW(draw_frame(frame), std::invalid_argument);
+  frame.cnn = cv::Mat::zeros(120, 160, CV_32FC1);
+  EXPECT_THROW(draw_frame(frame), std::invalid_argument);
+  frame = grey_frame();
+  frame.rgb = cv::Mat();
+  EXPECT_THROW(draw_frame(frame), std::invalid_argument);
+}
+
+// Projects p_w with the view, as draw_map does.
+cv::Point2d project(const MapView& view, const Vec3d& p_w) {
+  const Vec3d p_v = view.T_v_w * p_w;
+  return {view.focal_px * p_v.x() / p_v.z() + 0.5 * view.width,
+          view.focal_px * p_v.y() / p_v.z() + 0.5 * view.height};
+}
+
+TEST(MapDrawer, LookAtPutsTheTargetOnTheAxisAndDownDown) {
+  const Vec3d eye(1.0, -2.0, 0.5), target(0.2, 0.3, 3.0), down(0.0, 0.0, -1.0);
+  const SE3 T_v_w = look_at(eye, target, down);
+  const Vec3d target_v = T_v_w * target;
+  EXPECT_NEAR(target_v.x(), 0.0, 1e-12);
+  EXPECT_NEAR(target_v.y(), 0.0, 1e-12);
+  EXPECT_NEAR(target_v.z(), (target - eye).norm(), 1e-12);
+  // A point below the target (along down) lands below the image centre.
+  EXPECT_GT((T_v_w * (target + 0.1 * down)).y(), 0.0);
+  EXPECT_THROW(look_at(eye, eye, down), std::invalid_argument);
+  EXPECT_THROW(look_at(eye, eye + down, down), std::invalid_argument);
+}
+
+TEST(MapDrawer, TheFollowingViewSeesTheCameraFromBehindAndAbove) {
+  const SE3 T_w_c(Mat3d(Eigen::AngleAxisd(0.7, Vec3d(0.2, 1.0, 0.1).normalized())),
+                  Vec3d(0.5, -0.3, 2.0));
+  MapView view;
+  view.T_v_w = follow_view(T_w_c, 1.8, 0.7);
+  const Vec3d centre_v = view.T_v_w * T_w_c.translation();
+  EXPECT_NEAR(centre_v.norm(), std::hypot(1.8, 0.7), 1e-9);
+  const cv::Point2d c = project(view, T_w_c.translation());
+  EXPECT_NEAR(c.x, 0.5 * view.width, 1e-6);
+  EXPECT_NEAR(c.y, 0.5 * view.height, 1e-6);
+  // A point 2 m ahead of the camera is seen farther away, above the camera centre (the eye is
+  // above it), and not to the side.
+  const cv::Point2d ahead = project(view, T_w_c * Vec3d(0.0, 0.0, 2.0));
+  EXPECT_NEAR(ahead.x, 0.5 * view.width, 1e-6);
+  EXPECT_LT(ahead.y, 0.5 * view.height - 20.0);
+  // The camera's right is the view's right.
+  EXPECT_GT(project(view, T_w_c * Vec3d(0.5, 0.0, 0.0)).x, 0.5 * view.width + 20.0);
+}
+
+TEST(MapDrawer, DrawsPointsWhereTheyProjectAndNothingBehindTheView) {
+  MapView view;
+  view.width = 200;
+  view.height = 100;
+  view.focal_px = 100.0;
+  view.T_v_w = SE3();  // the view camera at the origin, looking along +z
+  MapSnapshot map;
+  map.points_w = {Vec3d(0.0, 0.0, 2.0), Vec3d(1.0, 0.0, 2.0), Vec3d(0.0, 0.0, -2.0)};
+  const cv::Mat image = draw_map(map, std::nullopt, view);
+  const cv::Vec3b background = pixel(image, 10, 10);
+  EXPECT_NE(pixel(image, 100, 50), background);  // (0, 0, 2): the centre
+  EXPECT_NE(pixel(image, 150, 50), background);  // (1, 0, 2): 100 * 1 / 2 to the right
+  cv::Mat differs;
+  cv::Mat background_image(image.size(), CV_8UC3, cv::Scalar(background));
+  cv::absdiff(image, background_image, differs);
+  cv::cvtColor(differs, differs, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(cv::countNonZero(differs), 2 * 4);  // two 2x2 points; the one behind is not drawn
+}
+
+TEST(MapDrawer, TheCurrentCameraIsDrawnAndClippedAtTheNearPlane) {
+  MapView view;
+  view.width = 200;
+  view.height = 100;
+  view.focal_px = 100.0;
+  view.T_v_w = SE3();
+  MapSnapshot empty;
+  // A camera straddling the view's near plane: drawn in part, no crash, red present.
+  for (const double z : {1.0, 0.03, -0.05}) {
+    const cv::Mat image = draw_map(empty, SE3(Quatd::Identity(), Vec3d(0.0, 0.0, z)), view);
+    std::vector<cv::Mat> channels;
+    cv::split(image, channels);
+    cv::Mat red = (channels[2] > 150) & (channels[0] < 100);
+    if (z > 0.0) {
+      EXPECT_GT(cv::countNonZero(red), 0) << "z = " << z;
+    }
+  }
+  // Behind the view: nothing.
+  const cv::Mat behind = draw_map(empty, SE3(Quatd::Identity(), Vec3d(0.0, 0.0, -1.0)), view);
+  const cv::Mat background(behind.size(), CV_8UC3, cv::Scalar(pixel(behind, 0, 0)));
+  EXPECT_EQ(cv::norm(behind, background, cv::NORM_INF), 0.0);
+}
+
+TEST(MapDrawer, SnapshotCopiesPointsKeyframesAndTheirTree) {
+  map::Map map;
+  auto first = std::make_shared<map::KeyFrame>(map.next_keyframe_id(), 0.0,
+                                               std::make_shared<map::FrameFeatures>(), SE3());
+  map.add_keyframe(first);
+  const SE3 T_w_second(Quatd::Identity(), Vec3d(0.3, 0.0, 0.1));
+  auto second = std::make_shared<map::KeyFrame>(
+      map.next_keyframe_id(), 1.0, std::make_shared<map::FrameFeatures>(), T_w_second.inverse());
+  map.add_keyframe(second);
+  second->set_parent(first);
+  map.add_map_point(
+      std::make_shared<map::MapPoint>(map.next_map_point_id(), Vec3d(1.0, 2.0, 3.0), first));
+  const MapSnapshot snapshot = snapshot_map(map);
+  ASSERT_EQ(snapshot.points_w.size(), 1u);
+  EXPECT_EQ(snapshot.points_w[0], Vec3d(1.0, 2.0, 3.0));
+  ASSERT_EQ(snapshot.keyframes_T_w_c.size(), 2u);
+  EXPECT_NEAR((snapshot.keyframes_T_w_c[1].translation() - Vec3d(0.3, 0.0, 0.1)).norm(), 0.0,
+              1e-12);
+  ASSERT_EQ(snapshot.tree_edges_w.size(), 1u);
+  EXPECT_NEAR((snapshot.tree_edges_w[0].first - Vec3d(0.3, 0.0, 0.1)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(snapshot.tree_edges_w[0].second.norm(), 0.0, 1e-12);
+}
+
+class ViewerImages : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        fs::path(::testing::TempDir()) /
+        ("viewer_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(ViewerImages, EveryNthFrameIsWrittenWithBothPanels) {
+  auto map = std::make_shared<map::Map>();
+  ViewerConfig config;
+  config.output_dir = dir_.string();
+  config.every_n_frames = 3;
+  config.map_width_px = 100;
+  config.queue_capacity = 1;  // show() must wait for the viewer, never drop
+  Viewer viewer(config, map);
+  for (std::size_t i = 0; i < 10; ++i) {
+    ViewFrame frame = grey_frame(i);
+    frame.T_w_c = SE3(Quatd::Identity(), Vec3d(0.01 * i, 0.0, 0.0));
+    viewer.show(frame);
+  }
+  viewer.finish();
+  EXPECT_EQ(viewer.frames_drawn(), 4u);
+  EXPECT_EQ(viewer.frames_dropped(), 0u);
+  for (const char* name :
+       {"frame_000000.png", "frame_000003.png", "frame_000006.png", "frame_000009.png"}) {
+    const cv::Mat image = cv::imread((dir_ / name).string());
+    ASSERT_FALSE(image.empty()) << name;
+    EXPECT_EQ(image.cols, 160 + 100);
+    EXPECT_EQ(image.rows, 120 + kStatusBarPx);
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "frame_000001.png"));
+}
+
+TEST_F(ViewerImages, TheMapIsDrawnAsItWasWhenTheFrameWasShown) {
+  auto map = std::make_shared<map::Map>();
+  ViewerConfig config;
+  config.output_dir = dir_.string();
+  config.map_width_px = 160;
+  Viewer viewer(config, map);
+  ViewFrame frame = grey_frame(0);
+  frame.T_w_c = SE3();
+  viewer.show(frame);
+  // Points added after show() must not appear in that frame's image.
+  for (int i = 0; i < 50; ++i) {
+    map->add_map_point(std::make_shared<map::MapPoint>(map->next_map_point_id(),
+                                                       Vec3d(0.02 * i - 0.5, 0.0, 1.0), nullptr));
+  }
+  frame.index = 1;
+  viewer.show(frame);
+  viewer.finish();
+  const cv::Mat before = cv::imread((dir_ / "frame_000000.png").string());
+  const cv::Mat after = cv::imread((dir_ / "frame_000001.png").string());
+  ASSERT_FALSE(before.empty());
+  ASSERT_FALSE(after.empty());
+  const cv::Rect map_panel(160, 0, 160, before.rows);
+  const cv::Mat background(map_panel.size(), CV_8UC3, cv::Scalar(pixel(before, 165, 5)));
+  // Only the current camera is drawn before; the points too after.
+  const double before_diff = cv::norm(before(map_panel), background, cv::NORM_L1);
+  const double after_diff = cv::norm(after(map_panel), background, cv::NORM_L1);
+  EXPECT_GT(after_diff, before_diff + 50 * 4 * 100);
+}
+
+TEST_F(ViewerImages, AnImageThatCannotBeWrittenIsAnErrorOfShowOrFinish) {
+  auto map = std::make_shared<map::Map>();
+  ViewerConfig config;
+  config.output_dir = dir_.string();
+  config.queue_capacity = 1;
+  Viewer viewer(config, map);
+  fs::remove_all(dir_);
+  fs::create_directories(dir_.parent_path());
+  {
+    std::ofstream blocker(dir_);  // a file where the folder was
+  }
+  bool thrown = false;
+  try {
+    for (std::size_t i = 0; i < 5; ++i) viewer.show(grey_frame(i));
+    viewer.finish();
+  } catch (const InputError& e) {
+    thrown = true;
+    EXPECT_NE(std::string(e.what()).find("frame_000000.png"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(thrown);
+  fs::remove(dir_);
+}
+
+TEST(ViewerConfig, InvalidSettingsNameTheirKey) {
+  ViewerConfig config;
+  EXPECT_THROW(config.validate(), ConfigError);  // neither window nor images
+  config.output_dir = "x";
+  config.every_n_frames = 0;
+  try {
+    config.validate();
+    ADD_FAILURE() << "every_n_frames = 0 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("every_n_frames"), std::string::npos);
+  }
+  config.every_n_frames = 1;
+  config.viewpoint_back_m = 0.0;
+  config.viewpoint_up_m = 0.0;
+  EXPECT_THROW(config.validate(), ConfigError);
+}
+
+TEST(Viewer, AWindowWithoutADisplayIsAClearError) {
+  const char* names[] = {"DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"};
+  std::string saved[3];
+  bool had[3];
+  for (int i = 0; i < 3; ++i) {
+    const char* v = std::getenv(names[i]);
+    had[i] = v != nullptr;
+    if (had[i]) saved[i] = v;
+    unsetenv(names[i]);
+  }
+  ViewerConfig config;
+  config.window = true;
+  EXPECT_FALSE(display_available());
+  try {
+    Viewer viewer(config, std::make_shared<map::Map>());
+    ADD_FAILURE() << "a window without a display was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("DISPLAY"), std::string::npos) << e.what();
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (had[i]) setenv(names[i], saved[i].c_str(), 1);
+  }
+}
+
+}  // namespace
+}  // namespace ddl::viewer
