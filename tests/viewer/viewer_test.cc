@@ -192,16 +192,21 @@ class ViewerImages : public ::testing::Test {
     fs::remove_all(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
+  /// Images into dir_, nothing else.
+  ViewerConfig image_config(int map_width_px = 640, std::size_t queue_capacity = 4) const {
+    ViewerConfig config;
+    config.output_dir = dir_.string();
+    config.map_width_px = map_width_px;
+    config.queue_capacity = queue_capacity;
+    return config;
+  }
   fs::path dir_;
 };
 
 TEST_F(ViewerImages, EveryNthFrameIsWrittenWithBothPanels) {
   auto map = std::make_shared<map::Map>();
-  ViewerConfig config;
-  config.output_dir = dir_.string();
+  ViewerConfig config = image_config(100, 1);  // queue of 1: show() must wait, never drop
   config.every_n_frames = 3;
-  config.map_width_px = 100;
-  config.queue_capacity = 1;  // show() must wait for the viewer, never drop
   Viewer viewer(config, map);
   for (std::size_t i = 0; i < 10; ++i) {
     ViewFrame frame = grey_frame(i);
@@ -223,10 +228,7 @@ TEST_F(ViewerImages, EveryNthFrameIsWrittenWithBothPanels) {
 
 TEST_F(ViewerImages, TheMapIsDrawnAsItWasWhenTheFrameWasShown) {
   auto map = std::make_shared<map::Map>();
-  ViewerConfig config;
-  config.output_dir = dir_.string();
-  config.map_width_px = 160;
-  Viewer viewer(config, map);
+  Viewer viewer(image_config(160), map);
   ViewFrame frame = grey_frame(0);
   frame.T_w_c = SE3();
   viewer.show(frame);
@@ -252,10 +254,7 @@ TEST_F(ViewerImages, TheMapIsDrawnAsItWasWhenTheFrameWasShown) {
 
 TEST_F(ViewerImages, AnImageThatCannotBeWrittenIsAnErrorOfShowOrFinish) {
   auto map = std::make_shared<map::Map>();
-  ViewerConfig config;
-  config.output_dir = dir_.string();
-  config.queue_capacity = 1;
-  Viewer viewer(config, map);
+  Viewer viewer(image_config(640, 1), map);
   fs::remove_all(dir_);
   fs::create_directories(dir_.parent_path());
   {
