@@ -109,7 +109,11 @@ RunResult run_sequence_command(const RunArgs& args,
     } catch (const ConfigError& e) {
       throw ConfigError(fmt::format("--viewer-every / --save-viewer: {}", e.what()));
     }
-    if (args.viewer && !viewer::display_available()) throw viewer::no_display_error();
+    if (args.viewer) {
+      if (const std::optional<std::string> problem = viewer::probe_window_system()) {
+        throw Error(*problem);
+      }
+    }
   }
 
   io::DatasetOptions dataset_options;

@@ -138,17 +138,14 @@ TrackingResult Tracker::track(Frame frame, const MappingStatus& mapping) {
   result.timings.features_ms = prepared_.features_ms;
   result.num_features = frame.size();
 
-  map_->read_consistent([&] { track_locked(frame, mapping, result); });
   const map::FrameFeatures& features = frame.features();
   result.keypoints.resize(frame.size());
   for (std::size_t i = 0; i < frame.size(); ++i) {
-    KeypointStatus& k = result.keypoints[i];
-    k.u = features.keypoints[i].pt.x;
-    k.v = features.keypoints[i].pt.y;
-    // Outliers were cleared from the slots of a tracked frame; a lost frame's slots hold the
-    // matches of the attempt that failed.
-    k.matched = result.tracked() && frame.map_point(i) != nullptr;
+    result.keypoints[i].u = features.keypoints[i].pt.x;
+    result.keypoints[i].v = features.keypoints[i].pt.y;
   }
+  // track_locked() sets the matched flags of a tracked frame.
+  map_->read_consistent([&] { track_locked(frame, mapping, result); });
   last_frame_ = std::move(frame);
   // The whole tracking work of the frame, also what prepare_frame() and low_cost_pose() did.
   result.timings.total_ms = total.elapsed_ms() + prepared_.features_ms +
@@ -244,6 +241,12 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
   for (std::size_t i = 0; i < frame.size(); ++i) {
     const map::MapPointPtr& p = frame.map_point(i);
     if (p && p->num_observations() < 1) frame.clear_map_point(i);
+  }
+
+  // The inlier matches, before a new keyframe gives the frame its new close points (as
+  // ORB-SLAM2's FrameDrawer::Update runs before keyframe insertion).
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    result.keypoints[i].matched = frame.map_point(i) != nullptr && !frame.is_outlier(i);
   }
 
   stage.reset();

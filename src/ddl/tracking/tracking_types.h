@@ -56,7 +56,8 @@ struct TrackingTimings {
 struct KeypointStatus {
   float u = 0.0f;  // undistorted level-0 pixel
   float v = 0.0f;
-  bool matched = false;  // an inlier match of a map point in the final pose (tracked frames only)
+  bool matched = false;  // an inlier match of a map point in the final pose, before a new
+                         // keyframe added its new points (false on lost and initialising frames)
 };
 
 struct TrackingResult {

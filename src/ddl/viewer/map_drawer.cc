@@ -1,6 +1,8 @@
 #include "ddl/viewer/map_drawer.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -14,33 +16,64 @@ const cv::Scalar kKeyframeColour(255, 140, 40);
 const cv::Scalar kTreeColour(90, 200, 90);
 const cv::Scalar kCameraColour(40, 40, 255);
 
+// Clips the segment a-b to the box (Liang-Barsky, in double: cv::line takes int coordinates,
+// which far-off projections would overflow). False when nothing of it is inside.
+bool clip_segment(cv::Point2d& a, cv::Point2d& b, const cv::Rect2d& box) {
+  if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y)) {
+    return false;
+  }
+  const cv::Point2d d = b - a;
+  const std::array<double, 4> p = {-d.x, d.x, -d.y, d.y};
+  const std::array<double, 4> q = {a.x - box.x, box.x + box.width - a.x, a.y - box.y,
+                                   box.y + box.height - a.y};
+  double t0 = 0.0, t1 = 1.0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return false;
+      continue;
+    }
+    const double t = q[i] / p[i];
+    if (p[i] < 0.0) {
+      if (t > t1) return false;
+      t0 = std::max(t0, t);
+    } else {
+      if (t < t0) return false;
+      t1 = std::min(t1, t);
+    }
+  }
+  const cv::Point2d a0 = a;
+  a = a0 + t0 * d;
+  b = a0 + t1 * d;
+  return true;
+}
+
 struct Projector {
   const MapView& view;
+  cv::Point2d to_pixel(const Vec3d& p_v) const {
+    return {view.focal_px * p_v.x() / p_v.z() + 0.5 * view.width,
+            view.focal_px * p_v.y() / p_v.z() + 0.5 * view.height};
+  }
   bool project(const Vec3d& p_v, cv::Point2d& uv) const {
     if (p_v.z() < kNearPlaneM) return false;
-    uv = cv::Point2d(view.focal_px * p_v.x() / p_v.z() + 0.5 * view.width,
-                     view.focal_px * p_v.y() / p_v.z() + 0.5 * view.height);
+    uv = to_pixel(p_v);
     return true;
   }
-  // A segment in world coordinates, clipped at the near plane.
+  // A segment in world coordinates, clipped at the near plane and to a margin around the image.
   void line(cv::Mat& image, const Vec3d& a_w, const Vec3d& b_w, const cv::Scalar& colour,
             int thickness) const {
     Vec3d a = view.T_v_w * a_w;
     Vec3d b = view.T_v_w * b_w;
     if (a.z() < kNearPlaneM && b.z() < kNearPlaneM) return;
     if (a.z() < kNearPlaneM) std::swap(a, b);
-    if (b.z() < kNearPlaneM) b = a + (b - a) * ((a.z() - kNearPlaneM) / (a.z() - b.z()));
-    cv::Point2d ua, ub;
-    if (!project(a, ua) || !project(b, ub)) return;
-    // Far-off endpoints would overflow cv::line's fixed-point coordinates; clip to a margin.
-    const cv::Rect2d bounds(-view.width, -view.height, 3.0 * view.width, 3.0 * view.height);
-    cv::Point pa(ua), pb(ub);
-    if (!bounds.contains(ua) || !bounds.contains(ub)) {
-      if (!cv::clipLine(cv::Rect(cv::Point(bounds.tl()), cv::Size(bounds.size())), pa, pb)) {
-        return;
-      }
+    if (b.z() < kNearPlaneM) {
+      b = a + (b - a) * ((a.z() - kNearPlaneM) / (a.z() - b.z()));
+      b.z() = kNearPlaneM;  // exactly on the plane, whatever the rounding
     }
-    cv::line(image, pa, pb, colour, thickness, cv::LINE_AA);
+    cv::Point2d ua = to_pixel(a), ub = to_pixel(b);
+    const cv::Rect2d box(-view.width, -view.height, 3.0 * view.width, 3.0 * view.height);
+    if (!clip_segment(ua, ub, box)) return;
+    cv::line(image, cv::Point(cvRound(ua.x), cvRound(ua.y)),
+             cv::Point(cvRound(ub.x), cvRound(ub.y)), colour, thickness, cv::LINE_AA);
   }
 };
 

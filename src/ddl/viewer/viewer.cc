@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/highgui.hpp>
@@ -29,6 +32,34 @@ bool display_available() {
   return false;
 }
 
+std::optional<std::string> probe_window_system() {
+  if (!display_available()) return no_display_error().what();
+  // OpenCV's Qt backend aborts the process when the display cannot be reached (a stale DISPLAY,
+  // QT_QPA_PLATFORM=xcb without an X server), so a child process tries first.
+  std::fflush(nullptr);
+  const pid_t child = fork();
+  if (child < 0) return std::string("cannot test the display: fork failed");
+  if (child == 0) {
+    try {
+      cv::namedWindow("DDL-SLAM display test", cv::WINDOW_AUTOSIZE);
+      cv::destroyAllWindows();
+    } catch (...) {
+      _exit(1);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  if (waitpid(child, &status, 0) != child)
+    return std::string("cannot test the display: waitpid failed");
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return std::nullopt;
+  const char* display = std::getenv("DISPLAY");
+  return fmt::format(
+      "the viewer window cannot be opened on this display (DISPLAY='{}'): the window system "
+      "refused it (see the messages above); write the views as images with --save-viewer DIR "
+      "instead",
+      display != nullptr ? display : "");
+}
+
 Error no_display_error() {
   return Error(
       "the viewer window needs a display, and none of DISPLAY, WAYLAND_DISPLAY and "
@@ -42,12 +73,9 @@ void ViewerConfig::validate() const {
   if (every_n_frames < 1) throw ConfigError::for_key("every_n_frames", "must be >= 1");
   if (map_width_px < 16) throw ConfigError::for_key("map_width_px", "must be >= 16");
   if (!(map_focal_px > 0.0)) throw ConfigError::for_key("map_focal_px", "must be > 0");
-  if (!(viewpoint_back_m >= 0.0)) throw ConfigError::for_key("viewpoint_back_m", "must be >= 0");
+  // back = 0 would look straight down the camera's own down axis, which has no image "up".
+  if (!(viewpoint_back_m > 0.0)) throw ConfigError::for_key("viewpoint_back_m", "must be > 0");
   if (!(viewpoint_up_m >= 0.0)) throw ConfigError::for_key("viewpoint_up_m", "must be >= 0");
-  if (viewpoint_back_m == 0.0 && viewpoint_up_m == 0.0) {
-    throw ConfigError::for_key("viewpoint_back_m",
-                               "the view's eye must be away from the camera (back or up > 0)");
-  }
   if (queue_capacity < 1) throw ConfigError::for_key("queue_capacity", "must be >= 1");
 }
 
@@ -77,7 +105,15 @@ Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
       queue_(config.queue_capacity) {
   config_.validate();
   if (map_ == nullptr) throw Error("Viewer: no map given");
-  if (config_.window && !display_available()) throw no_display_error();
+  if (config_.window) {
+    if (!display_available()) throw no_display_error();
+    // OpenCV's Qt backend serves the thread that opened its first window, for the life of the
+    // process: a second viewer thread would wait on the first one, gone by then.
+    static std::atomic<bool> window_taken{false};
+    if (window_taken.exchange(true)) {
+      throw Error("only one viewer window per process (OpenCV's Qt backend serves one thread)");
+    }
+  }
   if (!config_.output_dir.empty()) {
     std::error_code ec;
     fs::create_directories(config_.output_dir, ec);
@@ -98,13 +134,13 @@ Viewer::~Viewer() {
 }
 
 void Viewer::show(ViewFrame frame) {
-  rethrow_error();
+  check_error();
   if (finished_) throw Error("Viewer::show after finish()");
   if (frame.index % static_cast<std::size_t>(config_.every_n_frames) != 0) return;
   Item item{std::move(frame), std::nullopt};
   if (lossless_) {
     item.map = snapshot_map(*map_);
-    if (!queue_.push(std::move(item))) rethrow_error();
+    if (!queue_.push(std::move(item))) check_error();
   } else if (!queue_.try_push(std::move(item))) {
     ++dropped_;
   }
@@ -116,16 +152,21 @@ void Viewer::finish() {
   queue_.close();
   if (thread_.joinable()) thread_.join();
   if (dropped_ > 0) spdlog::info("viewer: {} frames dropped (it fell behind)", dropped_);
-  rethrow_error();
+  if (!error_thrown_) rethrow_error();
+}
+
+void Viewer::check_error() {
+  try {
+    rethrow_error();
+  } catch (...) {
+    error_thrown_ = true;  // finish() then does not report it a second time
+    throw;
+  }
 }
 
 void Viewer::rethrow_error() {
   std::lock_guard lock(error_mutex_);
-  if (error_) {
-    std::exception_ptr error = error_;
-    error_ = nullptr;
-    std::rethrow_exception(error);
-  }
+  if (error_) std::rethrow_exception(error_);  // sticky: every later call fails as well
 }
 
 void Viewer::run() {
@@ -162,8 +203,10 @@ void Viewer::run() {
   if (window_open) {
     try {
       cv::destroyWindow(kWindowName);
-    } catch (const cv::Exception& e) {
+    } catch (const std::exception& e) {
       spdlog::warn("viewer: closing the window failed: {}", e.what());
+    } catch (...) {
+      spdlog::warn("viewer: closing the window failed");
     }
   }
 }

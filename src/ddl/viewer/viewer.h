@@ -9,10 +9,13 @@
 // dropped (counted) and the map is copied when the frame is drawn, so the viewer cannot slow
 // tracking down.
 // The window (OpenCV highgui) needs a display: DISPLAY or WAYLAND_DISPLAY (or QT_QPA_PLATFORM,
-// e.g. "offscreen") must be set, otherwise the constructor throws. 'q' or Esc in the window
-// requests a stop (stop_requested()); the caller decides what to do with it.
-// Errors of the viewer thread (an image that cannot be written) close the queue; the next
-// show() or finish() rethrows them.
+// e.g. "offscreen") must be set, otherwise the constructor throws; probe_window_system() checks
+// that it can be reached (the CLI calls it before the run starts). One window per process: the
+// Qt backend serves the first thread that opened a window. The window is repainted and its keys
+// read when a frame is drawn. 'q' or Esc in the window requests a stop (stop_requested()); the
+// caller decides what to do with it.
+// Errors of the viewer thread (an image that cannot be written) close the queue; every later
+// show() rethrows them, and finish() does unless show() did already.
 // Thread-safety: show(), finish() and the accessors from one thread (the caller's).
 
 #include <atomic>
@@ -52,6 +55,10 @@ struct ViewerConfig {
 bool display_available();
 /// The error for a window asked for without a display.
 Error no_display_error();
+/// Whether a window can really be opened: display_available(), then a child process opens and
+/// closes one (OpenCV's Qt backend aborts the process when the display cannot be reached).
+/// std::nullopt when it can, else the reason. Call it before starting threads (it forks).
+std::optional<std::string> probe_window_system();
 
 /// One composed view: the frame panel with the map panel to its right.
 cv::Mat compose_view(const ViewFrame& frame, const MapSnapshot& map, const ViewerConfig& config);
@@ -84,6 +91,7 @@ class Viewer {
   };
   void run();
   void rethrow_error();
+  void check_error();  // rethrow_error() for show(), remembering that the error was thrown
 
   ViewerConfig config_;
   std::shared_ptr<const map::Map> map_;
@@ -96,6 +104,7 @@ class Viewer {
   std::mutex error_mutex_;
   std::exception_ptr error_;
   bool finished_ = false;
+  bool error_thrown_ = false;  // show() threw the viewer thread's error already
 };
 
 }  // namespace ddl::viewer

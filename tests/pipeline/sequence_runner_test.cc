@@ -1,0 +1,83 @@
+// run_sequence's per-frame callback: it sees every processed frame with its outcome, and
+// returning false stops the run like Ctrl-C, with the outputs so far written.
+
+#include "ddl/pipeline/sequence_runner.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ddl/io/dataset_reader.h"
+#include "ddl/pipeline/system.h"
+#include "pipeline_test_support.h"
+
+namespace ddl::pipeline {
+namespace {
+namespace fs = std::filesystem;
+
+// Frames rendered in memory, served as a dataset.
+class MemoryDataset final : public io::DatasetReader {
+ public:
+  MemoryDataset(const synthetic::SequenceSource& source) : camera_(source.camera()) {
+    for (std::size_t i = 0; i < source.frame_count(); ++i) {
+      io::RgbdFrame frame = testing::to_rgbd(source.render_frame(i), camera_);
+      frame.index = i;
+      frames_.push_back(std::move(frame));
+    }
+  }
+  std::size_t size() const override { return frames_.size(); }
+  double timestamp(std::size_t i) const override { return frames_.at(i).timestamp_s; }
+  io::RgbdFrame frame(std::size_t i) const override { return frames_.at(i); }
+  const camera::PinholeCamera& camera() const override { return camera_; }
+  std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
+  std::string name() const override { return "memory"; }
+
+ private:
+  camera::PinholeCamera camera_;
+  std::vector<io::RgbdFrame> frames_;
+};
+
+std::size_t pose_lines(const fs::path& trajectory) {
+  std::ifstream file(trajectory);
+  std::size_t lines = 0;
+  for (std::string line; std::getline(file, line);) lines += !line.empty() && line[0] != '#';
+  return lines;
+}
+
+TEST(SequenceRunner, TheFrameCallbackSeesEveryFrameAndCanStopTheRun) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 20));
+  const MemoryDataset dataset(*source);
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_callback";
+  fs::remove_all(out);
+
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  RunOptions options;
+  options.output_dir = out.string();
+  options.evaluate = false;
+  std::vector<std::size_t> seen;
+  std::size_t matched_keypoints = 0;
+  options.on_frame = [&](const io::RgbdFrame& frame, const FrameOutcome& outcome) {
+    seen.push_back(frame.index);
+    EXPECT_EQ(outcome.tracking.keypoints.size(), outcome.tracking.num_features);
+    for (const tracking::KeypointStatus& k : outcome.tracking.keypoints)
+      matched_keypoints += k.matched;
+    return frame.index < 7;  // stop after frame 7
+  };
+  const RunOutcome outcome = run_sequence(dataset, system, options);
+  EXPECT_TRUE(outcome.interrupted);
+  EXPECT_TRUE(outcome.summary["interrupted"].get<bool>());
+  EXPECT_EQ(seen, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_GT(matched_keypoints, 7u * 100u);  // frames 1-7 track against the map
+  // The frames processed before the stop are written.
+  EXPECT_EQ(pose_lines(out / "CameraTrajectory.txt"), 8u);
+  fs::remove_all(out);
+}
+
+}  // namespace
+}  // namespace ddl::pipeline
