@@ -109,7 +109,7 @@ struct SourceView {
   cv::Mat repaired_mask;
   /// depth_blocks(depth_m, exclude_mask, repaired_mask), when the caller keeps it; otherwise
   /// inpaint() computes what it needs.
-  std::shared_ptr<const DepthBlocks> blocks;
+  std::shared_ptr<const DepthBlocks> blocks = nullptr;
 };
 
 struct InpaintingResult {

@@ -112,7 +112,7 @@ void DenseMapper::finish() {
 
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
-  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat(), cv::Mat()};
+  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat(), cv::Mat(), nullptr};
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
   if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
