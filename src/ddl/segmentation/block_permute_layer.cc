@@ -1,12 +1,12 @@
 #include "ddl/segmentation/block_permute_layer.h"
 
 #include <cstring>
-#include <mutex>
+#include <opencv2/dnn/all_layers.hpp>
 
 namespace ddl::segmentation {
 
 BlockPermuteLayer::BlockPermuteLayer(const cv::dnn::LayerParams& params)
-    : Layer(params), fallback_(cv::dnn::PermuteLayer::create(params)) {
+    : FallbackLayer(params, cv::dnn::PermuteLayer::create(params)) {
   if (params.has("order")) {
     const cv::dnn::DictValue& order = params.get("order");
     for (int i = 0; i < order.size(); ++i) order_.push_back(order.get<int>(i));
@@ -17,18 +17,7 @@ cv::Ptr<cv::dnn::Layer> BlockPermuteLayer::create(cv::dnn::LayerParams& params) 
   return cv::makePtr<BlockPermuteLayer>(params);
 }
 
-bool BlockPermuteLayer::getMemoryShapes(const std::vector<cv::dnn::MatShape>& inputs,
-                                        int required_outputs,
-                                        std::vector<cv::dnn::MatShape>& outputs,
-                                        std::vector<cv::dnn::MatShape>& internals) const {
-  return fallback_->getMemoryShapes(inputs, required_outputs, outputs, internals);
-}
-
-void BlockPermuteLayer::finalize(cv::InputArrayOfArrays inputs, cv::OutputArrayOfArrays outputs) {
-  fallback_->finalize(inputs, outputs);
-}
-
-bool BlockPermuteLayer::block_permute(const cv::Mat& in, cv::Mat& out) const {
+bool BlockPermuteLayer::compute(const cv::Mat& in, cv::Mat& out) const {
   const int dims = in.dims;
   if (in.type() != CV_32F || out.type() != CV_32F || !in.isContinuous() || !out.isContinuous() ||
       static_cast<int>(order_.size()) != dims || out.dims != dims) {
@@ -66,21 +55,6 @@ bool BlockPermuteLayer::block_permute(const cv::Mat& in, cv::Mat& out) const {
     }
   }
   return true;
-}
-
-void BlockPermuteLayer::forward(cv::InputArrayOfArrays inputs, cv::OutputArrayOfArrays outputs,
-                                cv::OutputArrayOfArrays internals) {
-  std::vector<cv::Mat> in, out;
-  inputs.getMatVector(in);
-  outputs.getMatVector(out);
-  used_block_path_ = in.size() == 1 && out.size() == 1 && block_permute(in[0], out[0]);
-  if (!used_block_path_) fallback_->forward(inputs, outputs, internals);
-}
-
-void register_block_permute_layer() {
-  static std::once_flag once;
-  std::call_once(
-      once, [] { cv::dnn::LayerFactory::registerLayer("Permute", BlockPermuteLayer::create); });
 }
 
 }  // namespace ddl::segmentation

@@ -7,18 +7,18 @@
 // Any other case (other element types, blocks of fewer than kMinBlockElements) runs OpenCV's own
 // PermuteLayer, created from the same parameters.
 //
-// OpenCV creates layers through a process-wide factory, so the stand-in is installed there once
-// per process by register_block_permute_layer() (the only way OpenCV offers to replace a layer).
-// Thread-safety: register_block_permute_layer() may be called from any thread; one layer
-// instance serves one network, as OpenCV's own layers do.
+// Installed by register_fast_layers() (segmentation/fast_layers.h). Thread-safety: one instance
+// serves one network, as OpenCV's own layers do.
 
+#include <cstddef>
 #include <opencv2/dnn.hpp>
-#include <opencv2/dnn/all_layers.hpp>
 #include <vector>
+
+#include "ddl/segmentation/fallback_layer.h"
 
 namespace ddl::segmentation {
 
-class BlockPermuteLayer final : public cv::dnn::Layer {
+class BlockPermuteLayer final : public FallbackLayer {
  public:
   /// Innermost elements a block needs for the fast path (smaller blocks: OpenCV's layer).
   static constexpr std::size_t kMinBlockElements = 16;
@@ -26,27 +26,10 @@ class BlockPermuteLayer final : public cv::dnn::Layer {
   explicit BlockPermuteLayer(const cv::dnn::LayerParams& params);
   static cv::Ptr<cv::dnn::Layer> create(cv::dnn::LayerParams& params);
 
-  bool getMemoryShapes(const std::vector<cv::dnn::MatShape>& inputs, int required_outputs,
-                       std::vector<cv::dnn::MatShape>& outputs,
-                       std::vector<cv::dnn::MatShape>& internals) const override;
-  void finalize(cv::InputArrayOfArrays inputs, cv::OutputArrayOfArrays outputs) override;
-  void forward(cv::InputArrayOfArrays inputs, cv::OutputArrayOfArrays outputs,
-               cv::OutputArrayOfArrays internals) override;
-
-  /// Whether the last forward() took the block path (for tests).
-  bool used_block_path() const { return used_block_path_; }
-
  private:
-  // Copies `in` into `out` permuted, moving blocks of the dimensions from `first_kept` on.
-  bool block_permute(const cv::Mat& in, cv::Mat& out) const;
+  bool compute(const cv::Mat& in, cv::Mat& out) const override;
 
   std::vector<int> order_;  // output dimension i is input dimension order_[i]
-  cv::Ptr<cv::dnn::PermuteLayer> fallback_;
-  bool used_block_path_ = false;
 };
-
-/// Installs BlockPermuteLayer as the "Permute" layer of networks set up from now on (once per
-/// process; later calls do nothing).
-void register_block_permute_layer();
 
 }  // namespace ddl::segmentation

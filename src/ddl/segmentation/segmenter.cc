@@ -12,7 +12,7 @@
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
-#include "ddl/segmentation/block_permute_layer.h"
+#include "ddl/segmentation/fast_layers.h"
 
 namespace ddl::segmentation {
 namespace fs = std::filesystem;
@@ -90,7 +90,7 @@ class OnnxSegmenter final : public Segmenter {
  public:
   OnnxSegmenter(const SegmenterConfig& config, std::string model_path)
       : config_(config), model_path_(std::move(model_path)) {
-    register_block_permute_layer();  // same output, faster channel shuffles
+    register_fast_layers();  // same output, faster channel shuffles and resizes
     try {
       net_ = cv::dnn::readNetFromONNX(model_path_);
     } catch (const cv::Exception& e) {

@@ -1,7 +1,7 @@
-// BlockPermuteLayer gives exactly what OpenCV's Permute layer gives: layer by layer on random
-// tensors, and for the whole ESPNetv2 network.
+// The faster layers give exactly what OpenCV's own give: BlockPermuteLayer and CornerResizeLayer
+// layer by layer on random tensors, and the whole ESPNetv2 network with both.
 
-#include "ddl/segmentation/block_permute_layer.h"
+#include "ddl/segmentation/fast_layers.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "ddl/segmentation/block_permute_layer.h"
+#include "ddl/segmentation/corner_resize_layer.h"
 #include "ddl/segmentation/segmenter.h"
 
 namespace ddl::segmentation {
@@ -72,7 +74,7 @@ TEST(BlockPermuteLayer, GivesExactlyWhatOpenCVsPermuteGives) {
     std::size_t block_elements = 1;
     int kept = static_cast<int>(c.order.size());
     while (kept > 0 && c.order[kept - 1] == kept - 1) block_elements *= c.shape[--kept];
-    EXPECT_EQ(block.used_block_path(),
+    EXPECT_EQ(block.used_own_path(),
               c.block_path && block_elements >= BlockPermuteLayer::kMinBlockElements);
   }
 }
@@ -84,21 +86,32 @@ std::string shared_dir() {
 
 constexpr char kBasketball[] = "/usr/share/doc/opencv-doc/examples/data/basketball1.png";
 
-cv::Mat network_scores(const fs::path& model, const cv::Mat& blob, bool* used_block_path) {
+struct NetworkRun {
+  cv::Mat scores;
+  bool block_permute_used = false;  // a BlockPermuteLayer took its block path
+  bool corner_resize_used = false;  // a CornerResizeLayer took its plane path
+};
+
+NetworkRun run_network(const fs::path& model, const cv::Mat& blob) {
   cv::dnn::Net net = cv::dnn::readNetFromONNX(model.string());
   net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   net.setInput(blob);
-  cv::Mat scores = net.forward().clone();
-  *used_block_path = false;
+  NetworkRun run;
+  run.scores = net.forward().clone();
   for (const std::string& name : net.getLayerNames()) {
-    const auto* layer = dynamic_cast<const BlockPermuteLayer*>(net.getLayer(name).get());
-    if (layer != nullptr && layer->used_block_path()) *used_block_path = true;
+    const cv::Ptr<cv::dnn::Layer> layer = net.getLayer(name);
+    if (const auto* p = dynamic_cast<const BlockPermuteLayer*>(layer.get())) {
+      run.block_permute_used |= p->used_own_path();
+    }
+    if (const auto* r = dynamic_cast<const CornerResizeLayer*>(layer.get())) {
+      run.corner_resize_used |= r->used_own_path();
+    }
   }
-  return scores;
+  return run;
 }
 
-TEST(BlockPermuteLayer, TheNetworksScoresAreBitForBitOpenCVs) {
+TEST(FastLayers, TheNetworksScoresAreBitForBitOpenCVs) {
   const fs::path model = fs::path(shared_dir()) / SegmenterConfig{}.model_path;
   if (!fs::exists(model)) GTEST_SKIP() << "model not found: " << model;
   if (!fs::exists(kBasketball)) GTEST_SKIP() << "opencv-doc not installed: " << kBasketball;
@@ -108,18 +121,64 @@ TEST(BlockPermuteLayer, TheNetworksScoresAreBitForBitOpenCVs) {
   const cv::Mat blob = cv::dnn::blobFromImage(
       image, 1.0, cv::Size(config.input_width, config.input_height), cv::Scalar(), true, false);
 
-  register_block_permute_layer();
-  bool block_used = false;
-  const cv::Mat ours = network_scores(model, blob, &block_used);
-  EXPECT_TRUE(block_used) << "no Permute layer of the network took the block path";
-  // OpenCV's own layer back for one network, then ours again.
+  register_fast_layers();
+  const NetworkRun ours = run_network(model, blob);
+  EXPECT_TRUE(ours.block_permute_used) << "no Permute layer took the block path";
+  EXPECT_TRUE(ours.corner_resize_used) << "no Resize layer took the plane path";
+  // OpenCV's own layers back for one network, then ours again.
   cv::dnn::LayerFactory::unregisterLayer("Permute");
-  bool reference_block_used = true;
-  const cv::Mat expected = network_scores(model, blob, &reference_block_used);
+  cv::dnn::LayerFactory::unregisterLayer("Resize");
+  const NetworkRun expected = run_network(model, blob);
   cv::dnn::LayerFactory::registerLayer("Permute", BlockPermuteLayer::create);
-  EXPECT_FALSE(reference_block_used);
-  ASSERT_EQ(ours.total(), expected.total());
-  EXPECT_EQ(cv::norm(ours, expected, cv::NORM_INF), 0.0);
+  cv::dnn::LayerFactory::registerLayer("Resize", CornerResizeLayer::create);
+  EXPECT_FALSE(expected.block_permute_used || expected.corner_resize_used);
+  ASSERT_EQ(ours.scores.total(), expected.scores.total());
+  EXPECT_EQ(cv::norm(ours.scores, expected.scores, cv::NORM_INF), 0.0);
+}
+
+cv::dnn::LayerParams resize_params(const std::string& interpolation, bool align_corners, int height,
+                                   int width) {
+  cv::dnn::LayerParams params;
+  params.name = "resize";
+  params.type = "Resize";
+  params.set("interpolation", interpolation);
+  params.set("align_corners", align_corners);
+  params.set("height", height);
+  params.set("width", width);
+  return params;
+}
+
+TEST(CornerResizeLayer, GivesExactlyWhatOpenCVsResizeGives) {
+  struct ResizeCase {
+    std::vector<int> shape;
+    int height, width;
+    std::string interpolation;
+    bool align_corners;
+    bool plane_path;
+  };
+  const std::vector<ResizeCase> cases = {
+      {{1, 21, 120, 160}, 240, 320, "bilinear", true, true},  // ESPNetv2's last resize
+      {{1, 10, 12, 16}, 120, 160, "bilinear", true, true},    // x10, as in its decoder
+      {{2, 3, 7, 5}, 13, 11, "bilinear", true, true},         // odd sizes, batch of 2
+      {{1, 3, 9, 9}, 5, 4, "bilinear", true, true},           // downscaling
+      {{1, 4, 6, 8}, 12, 16, "bilinear", false, false},       // not aligned corners: OpenCV's
+      {{1, 4, 6, 8}, 12, 16, "nearest", false, false},        // nearest: OpenCV's
+  };
+  cv::RNG rng(5);
+  for (const ResizeCase& c : cases) {
+    cv::Mat input(c.shape, CV_32F);
+    rng.fill(input, cv::RNG::UNIFORM, -30.0, 30.0);
+    cv::dnn::LayerParams params =
+        resize_params(c.interpolation, c.align_corners, c.height, c.width);
+    CornerResizeLayer ours_layer(params);
+    const cv::Mat ours = run_layer(ours_layer, input);
+    cv::Ptr<cv::dnn::ResizeLayer> reference = cv::dnn::ResizeLayer::create(params);
+    const cv::Mat expected = run_layer(*reference, input);
+    ASSERT_EQ(ours.total(), expected.total());
+    EXPECT_EQ(cv::norm(ours, expected, cv::NORM_INF), 0.0)
+        << c.interpolation << " " << c.height << "x" << c.width;
+    EXPECT_EQ(ours_layer.used_own_path(), c.plane_path) << c.height << "x" << c.width;
+  }
 }
 
 }  // namespace
