@@ -99,10 +99,11 @@ RunResult run_sequence_command(const RunArgs& args,
   const pipeline::SystemConfig config = make_system_config(args);
   // The viewer's settings are checked before anything is loaded.
   std::optional<viewer::ViewerConfig> view_config;
-  if (args.viewer || !args.save_viewer_dir.empty()) {
+  if (args.viewer || !args.save_viewer_dir.empty() || !args.save_viewer_video.empty()) {
     view_config.emplace();
     view_config->window = args.viewer;
     view_config->output_dir = args.save_viewer_dir;
+    view_config->video_path = args.save_viewer_video;
     view_config->every_n_frames = args.viewer_every;
     try {
       view_config->validate();
@@ -160,6 +161,8 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.mask_evaluator = mask_evaluator.get();
   std::unique_ptr<viewer::Viewer> view;
   if (view_config) {
+    // The video plays at the sequence's rate, whichever frames are drawn.
+    view_config->video_fps = dataset->camera().fps / view_config->every_n_frames;
     view = std::make_unique<viewer::Viewer>(*view_config, system.map());
     run_options.on_frame = [&](const io::RgbdFrame& frame, const pipeline::FrameOutcome& result) {
       view->show(to_view_frame(frame, result, system.statistics().keyframes_created));
@@ -176,8 +179,9 @@ RunResult run_sequence_command(const RunArgs& args,
   progress.finish();
   if (view) {
     view->finish();
-    spdlog::info("viewer: {} views drawn{}", view->frames_drawn(),
-                 args.save_viewer_dir.empty() ? "" : " to " + args.save_viewer_dir);
+    spdlog::info("viewer: {} views drawn{}{}", view->frames_drawn(),
+                 args.save_viewer_dir.empty() ? "" : " to " + args.save_viewer_dir,
+                 args.save_viewer_video.empty() ? "" : " and " + args.save_viewer_video);
   }
   return {outcome.interrupted, outcome.summary};
 }
@@ -276,6 +280,9 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--save-viewer", args->save_viewer_dir,
                   "Write the viewer's images to DIR (frame_NNNNNN.png; every drawn frame, so a "
                   "deterministic run gives the same images)");
+  cmd->add_option("--save-viewer-video", args->save_viewer_video,
+                  "Write the viewer's views as a Motion-JPEG AVI video FILE, at the sequence's "
+                  "frame rate divided by --viewer-every");
   cmd->add_option("--viewer-every", args->viewer_every,
                   "Draw only the frames whose index is a multiple of N")
       ->check(CLI::PositiveNumber)

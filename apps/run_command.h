@@ -33,9 +33,10 @@ struct RunArgs {
   bool save_masks = false;
   bool save_inpainted = false;
   std::string segmentation;
-  bool viewer = false;          // --viewer: the viewer window
-  std::string save_viewer_dir;  // --save-viewer DIR: the viewer's images
-  int viewer_every = 1;         // --viewer-every N
+  bool viewer = false;            // --viewer: the viewer window
+  std::string save_viewer_dir;    // --save-viewer DIR: the viewer's images
+  std::string save_viewer_video;  // --save-viewer-video FILE: the viewer's views as a video
+  int viewer_every = 1;           // --viewer-every N
 };
 
 struct RunResult {

@@ -12,6 +12,7 @@
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 #include <optional>
 #include <string>
 #include <utility>
@@ -305,6 +306,42 @@ TEST_F(ViewerImages, AnImageThatCannotBeWrittenIsAnErrorOfShowOrFinish) {
   fs::remove(dir_);
 }
 
+TEST_F(ViewerImages, TheVideoHoldsEveryFrameDrawn) {
+  auto map = std::make_shared<map::Map>();
+  ViewerConfig config;
+  config.video_path = (dir_ / "new_folder" / "view.avi").string();  // its folder is created
+  config.map_width_px = 100;
+  config.every_n_frames = 2;
+  config.video_fps = 15.0;
+  config.queue_capacity = 1;
+  Viewer viewer(config, map);
+  for (std::size_t i = 0; i < 9; ++i) viewer.show(grey_frame(i));
+  viewer.finish();
+  EXPECT_EQ(viewer.frames_drawn(), 5u);
+  cv::VideoCapture capture(config.video_path, cv::CAP_OPENCV_MJPEG);
+  ASSERT_TRUE(capture.isOpened());
+  EXPECT_EQ(capture.get(cv::CAP_PROP_FRAME_WIDTH), 160 + 100);
+  EXPECT_EQ(capture.get(cv::CAP_PROP_FRAME_HEIGHT), 120 + kStatusBarPx);
+  EXPECT_NEAR(capture.get(cv::CAP_PROP_FPS), 15.0, 1e-6);
+  int frames = 0;
+  for (cv::Mat image; capture.read(image);) ++frames;
+  EXPECT_EQ(frames, 5);
+}
+
+TEST_F(ViewerImages, AVideoThatCannotBeWrittenNamesTheFile) {
+  ViewerConfig config;
+  config.video_path = (dir_ / "view.avi").string();
+  fs::create_directories(dir_ / "view.avi");  // a folder where the file should go
+  Viewer viewer(config, std::make_shared<map::Map>());
+  viewer.show(grey_frame(0));
+  try {
+    viewer.finish();
+    ADD_FAILURE() << "an unwritable video was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("view.avi"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ViewerConfig, InvalidSettingsNameTheirKey) {
   ViewerConfig config;
   EXPECT_THROW(config.validate(), ConfigError);  // neither window nor images
@@ -317,6 +354,9 @@ TEST(ViewerConfig, InvalidSettingsNameTheirKey) {
     EXPECT_NE(std::string(e.what()).find("every_n_frames"), std::string::npos);
   }
   config.every_n_frames = 1;
+  config.video_fps = 0.0;
+  EXPECT_THROW(config.validate(), ConfigError);
+  config.video_fps = 30.0;
   config.viewpoint_back_m = 0.0;  // straight down the camera's down axis: no image "up"
   EXPECT_THROW(config.validate(), ConfigError);
 }

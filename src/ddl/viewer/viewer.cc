@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <system_error>
 
 #include "ddl/core/error.h"
@@ -67,8 +68,12 @@ Error no_display_error() {
 }
 
 void ViewerConfig::validate() const {
-  if (!window && output_dir.empty()) {
-    throw ConfigError::for_key("output_dir", "the viewer needs a window or an output folder");
+  if (!window && output_dir.empty() && video_path.empty()) {
+    throw ConfigError::for_key("output_dir",
+                               "the viewer needs a window, an output folder or a video file");
+  }
+  if (!(video_fps > 0.0 && video_fps <= 1000.0)) {
+    throw ConfigError::for_key("video_fps", "must be in (0, 1000]");
   }
   if (every_n_frames < 1) throw ConfigError::for_key("every_n_frames", "must be >= 1");
   if (map_width_px < 16) throw ConfigError::for_key("map_width_px", "must be >= 16");
@@ -101,7 +106,7 @@ cv::Mat compose_view(const ViewFrame& frame, const MapSnapshot& map, const Viewe
 Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
     : config_(config),
       map_(std::move(map)),
-      lossless_(!config.output_dir.empty()),
+      lossless_(!config.output_dir.empty() || !config.video_path.empty()),
       queue_(config.queue_capacity) {
   config_.validate();
   if (map_ == nullptr) throw Error("Viewer: no map given");
@@ -120,6 +125,15 @@ Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
     if (ec || !fs::is_directory(config_.output_dir)) {
       throw InputError::at(config_.output_dir, "cannot create the viewer's output folder: " +
                                                    (ec ? ec.message() : "not a folder"));
+    }
+  }
+  if (!config_.video_path.empty()) {
+    const fs::path parent = fs::path(config_.video_path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) fs::create_directories(parent, ec);
+    if (ec) {
+      throw InputError::at(config_.video_path,
+                           "cannot create the folder of the viewer's video: " + ec.message());
     }
   }
   thread_ = std::thread([this] { run(); });
@@ -171,10 +185,22 @@ void Viewer::rethrow_error() {
 
 void Viewer::run() {
   bool window_open = false;
+  cv::VideoWriter video;
   try {
     while (std::optional<Item> item = queue_.pop()) {
       const MapSnapshot map = item->map ? std::move(*item->map) : snapshot_map(*map_);
       const cv::Mat view = compose_view(item->frame, map, config_);
+      if (!config_.video_path.empty()) {
+        if (!video.isOpened()) {
+          // Motion JPEG in AVI: OpenCV writes it without FFmpeg, and every player reads it.
+          video.open(config_.video_path, cv::CAP_OPENCV_MJPEG,
+                     cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), config_.video_fps, view.size());
+          if (!video.isOpened()) {
+            throw InputError::at(config_.video_path, "cannot write the viewer video (.avi)");
+          }
+        }
+        video.write(view);
+      }
       if (!config_.output_dir.empty()) {
         const fs::path path =
             fs::path(config_.output_dir) / fmt::format("frame_{:06d}.png", item->frame.index);

@@ -3,10 +3,10 @@
 // view following the camera) in its own thread, fed through a bounded queue, and shows the
 // result in a window and/or writes it as PNG images (docs/viewer.md).
 //
-// Flow control: with image output every shown frame is drawn (show() waits while the queue is
-// full) and the map is copied in show(), at the frame it belongs to, so a deterministic run gives
-// the same images. With a window only, show() never waits: a frame the viewer has no room for is
-// dropped (counted) and the map is copied when the frame is drawn, so the viewer cannot slow
+// Flow control: with image or video output every shown frame is drawn (show() waits while the queue
+// is full) and the map is copied in show(), at the frame it belongs to, so a deterministic run
+// gives the same images. With a window only, show() never waits: a frame the viewer has no room for
+// is dropped (counted) and the map is copied when the frame is drawn, so the viewer cannot slow
 // tracking down.
 // The window (OpenCV highgui) needs a display: DISPLAY or WAYLAND_DISPLAY (or QT_QPA_PLATFORM,
 // e.g. "offscreen") must be set, otherwise the constructor throws; probe_window_system() checks
@@ -38,6 +38,8 @@ namespace ddl::viewer {
 struct ViewerConfig {
   bool window = false;             // show the views in a window (needs a display)
   std::string output_dir;          // write <output_dir>/frame_<index, 6 digits>.png; empty = none
+  std::string video_path;          // write the views as a Motion-JPEG AVI video; empty = none
+  double video_fps = 30.0;         // the video's frame rate (a sequence's rate / every_n_frames)
   int every_n_frames = 1;          // draw the frames whose index is a multiple of this
   int map_width_px = 640;          // map panel width; its height is the frame panel's
   double map_focal_px = 420.0;     // focal length of the map panel's view camera
@@ -46,7 +48,7 @@ struct ViewerConfig {
   std::size_t queue_capacity = 4;  // frames waiting to be drawn
 
   /// Throws ConfigError naming the key for a value out of range, and when neither the window nor
-  /// an output folder is asked for.
+  /// an output folder nor a video is asked for.
   void validate() const;
 };
 
