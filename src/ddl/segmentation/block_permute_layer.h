@@ -3,7 +3,7 @@
 // the permutation keeps the innermost dimensions in place, it moves whole blocks of them with
 // memcpy instead of one element at a time. ESPNetv2's channel shuffles are such permutations
 // (order 0 2 1 3 4 on 1 x 5 x 10 x 120 x 160 at the 320x240 input): OpenCV 4.6's generic
-// Permute spent about 21 of the network's 106 ms on its 4 shuffles (docs/dynamics.md, "CNN cost").
+// Permute spent about 22 of the network's 106 ms on its 4 shuffles (docs/dynamics.md, "CNN cost").
 // Any other case (other element types, blocks of fewer than kMinBlockElements) runs OpenCV's own
 // PermuteLayer, created from the same parameters.
 //
