@@ -173,7 +173,8 @@ class Writer {
   void choice(const char* key, E value, const char* doc) {
     std::string choices;
     for (const auto& [v, name] : EnumNames<E>::kValues) {
-      choices += (choices.empty() ? "" : "|") + std::string(name);
+      if (!choices.empty()) choices += '|';
+      choices += name;
     }
     line(key, enum_name(value), fmt::format("{}{}[{}]", doc, *doc ? " " : "", choices).c_str());
   }
