@@ -54,7 +54,7 @@ cv::Mat run_layer(cv::dnn::Layer& layer, const cv::Mat& input,
   std::vector<cv::Mat> outputs{cv::Mat(out_shapes[0], input.type(), cv::Scalar(0x7777))};
   std::vector<cv::Mat> internals;
   for (const cv::dnn::MatShape& s : internal_shapes) internals.emplace_back(s, input.type());
-  layer.finalize(inputs, outputs);
+  layer.finalize(cv::InputArrayOfArrays(inputs), cv::OutputArrayOfArrays(outputs));
   layer.preferableTarget = target;
   layer.forward(inputs, outputs, internals);
   return outputs[0];
@@ -111,7 +111,7 @@ TEST(BlockPermuteLayer, TheIdentityInPlaceLeavesTheData) {
   cv::dnn::LayerParams params = permute_params({0, 1, 2, 3});
   BlockPermuteLayer layer(params);
   std::vector<cv::Mat> inputs{data}, outputs{data}, internals;
-  layer.finalize(inputs, outputs);
+  layer.finalize(cv::InputArrayOfArrays(inputs), cv::OutputArrayOfArrays(outputs));
   layer.forward(inputs, outputs, internals);
   EXPECT_TRUE(layer.used_own_path());
   EXPECT_EQ(cv::norm(data, before, cv::NORM_INF), 0.0);
