@@ -177,10 +177,10 @@ std::string benchmark_tables_markdown(const json& tables) {
     for (const json& r : t.at("rows")) {
       md += "| " + r.at("sequence").get<std::string>() + " |";
       for (const char* column : {"baseline", "ours"}) {
-        for (const char* stat : kStats) md += " " + cell(r[column][stat]) + " |";
+        for (const char* stat : kStats) md += fmt::format(" {} |", cell(r[column][stat]));
       }
       for (const char* stat : kStats) {
-        md += " " + cell(r["improvement_pct"][stat], "{:.2f}%") + " |";
+        md += fmt::format(" {} |", cell(r["improvement_pct"][stat], "{:.2f}%"));
       }
       md += "\n";
     }
@@ -204,16 +204,16 @@ std::string benchmark_tables_markdown(const json& tables) {
             count_cell(r["combined"]["frames"]) + " |";
       for (const char* source : kMaskSources) {
         for (const char* metric : {"mean_iou", "precision", "recall"}) {
-          md += " " + cell(r[source][metric], "{:.3f}") + " |";
+          md += fmt::format(" {} |", cell(r[source][metric], "{:.3f}"));
         }
       }
       const json& box = r["moved_object"];
       for (const char* source : kMaskSources) {
-        md += " " + (box.is_object() ? cell(box["recall"][source], "{:.3f}") : std::string("-")) +
-              " |";
+        md += fmt::format(
+            " {} |", box.is_object() ? cell(box["recall"][source], "{:.3f}") : std::string("-"));
       }
-      md += " " + count_cell(r["combined"]["static_frames"]) + " | " +
-            count_cell(r["combined"]["static_false_positive_px"]) + " |\n";
+      md += fmt::format(" {} | {} |\n", count_cell(r["combined"]["static_frames"]),
+                        count_cell(r["combined"]["static_false_positive_px"]));
     }
   }
 
@@ -231,10 +231,11 @@ std::string benchmark_tables_markdown(const json& tables) {
         md += " - | - | - | - |";
         continue;
       }
-      md += " " + count_cell(c["frames_processed"]) + " | " + count_cell(c["frames_tracked"]) +
-            " | " + cell(c["tracked_ratio"], "{:.3f}") + " | " + cell(c["wall_time_s"], "{:.1f}") +
-            (c.value("interrupted", false) ? " (interrupted)" : "") +
-            (c.value("failed", false) ? " (failed)" : "") + " |";
+      md += fmt::format(" {} | {} | {} | {}{}{} |", count_cell(c["frames_processed"]),
+                        count_cell(c["frames_tracked"]), cell(c["tracked_ratio"], "{:.3f}"),
+                        cell(c["wall_time_s"], "{:.1f}"),
+                        c.value("interrupted", false) ? " (interrupted)" : "",
+                        c.value("failed", false) ? " (failed)" : "");
     }
     md += "\n";
   }
