@@ -35,7 +35,6 @@ viewer::ViewFrame to_view_frame(const io::RgbdFrame& frame, const pipeline::Fram
                                 std::size_t keyframes_created) {
   viewer::ViewFrame view;
   view.index = frame.index;
-  view.timestamp_s = frame.timestamp_s;
   view.rgb = frame.rgb;
   view.cnn = outcome.masks.cnn;
   view.geometry = outcome.masks.geometry;

@@ -20,13 +20,12 @@ struct ViewKeypoint {
 
 struct ViewFrame {
   std::size_t index = 0;  // position in the sequence
-  double timestamp_s = 0.0;
-  cv::Mat rgb;       // CV_8UC3 BGR, undistorted
-  cv::Mat cnn;       // CV_8UC1 non-zero = CNN mask (may be empty)
-  cv::Mat geometry;  // CV_8UC1 non-zero = geometry-check mask (may be empty)
-  cv::Mat memory;    // CV_8UC1 non-zero = recalled by the dynamic memory (may be empty)
+  cv::Mat rgb;            // CV_8UC3 BGR, undistorted
+  cv::Mat cnn;            // CV_8UC1 non-zero = CNN mask (may be empty)
+  cv::Mat geometry;       // CV_8UC1 non-zero = geometry-check mask (may be empty)
+  cv::Mat memory;         // CV_8UC1 non-zero = recalled by the dynamic memory (may be empty)
   std::vector<ViewKeypoint> keypoints;
-  std::string state;          // tracking state as text ("OK", "LOST", ...)
+  std::string state;          // tracking state as text ("ok", "lost", ...)
   std::optional<SE3> T_w_c;   // camera pose when tracked
   std::size_t keyframes = 0;  // keyframes created so far
   bool map_reset = false;     // tracking cleared the map on this frame

@@ -23,6 +23,16 @@ namespace {
 
 constexpr const char* kWindowName = "DDL-SLAM";
 
+// Creates `folder` (and its parents) for the viewer's `what`; InputError naming it otherwise.
+void create_folder(const fs::path& folder, const std::string& what) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec || !fs::is_directory(folder)) {
+    throw InputError::at(folder.string(), "cannot create the folder of the viewer's " + what +
+                                              ": " + (ec ? ec.message() : "not a folder"));
+  }
+}
+
 }  // namespace
 
 bool display_available() {
@@ -119,23 +129,9 @@ Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
       throw Error("only one viewer window per process (OpenCV's Qt backend serves one thread)");
     }
   }
-  if (!config_.output_dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(config_.output_dir, ec);
-    if (ec || !fs::is_directory(config_.output_dir)) {
-      throw InputError::at(config_.output_dir, "cannot create the viewer's output folder: " +
-                                                   (ec ? ec.message() : "not a folder"));
-    }
-  }
-  if (!config_.video_path.empty()) {
-    const fs::path parent = fs::path(config_.video_path).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) fs::create_directories(parent, ec);
-    if (ec) {
-      throw InputError::at(config_.video_path,
-                           "cannot create the folder of the viewer's video: " + ec.message());
-    }
-  }
+  if (!config_.output_dir.empty()) create_folder(config_.output_dir, "images");
+  const fs::path video_folder = fs::path(config_.video_path).parent_path();
+  if (!video_folder.empty()) create_folder(video_folder, "video");
   thread_ = std::thread([this] { run(); });
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // The viewer: draws each shown frame (FrameDrawer panel) beside the map (MapDrawer panel, the
 // view following the camera) in its own thread, fed through a bounded queue, and shows the
-// result in a window and/or writes it as PNG images (docs/viewer.md).
+// result in a window and/or writes it as PNG images and/or a video (docs/viewer.md).
 //
 // Flow control: with image or video output every shown frame is drawn (show() waits while the queue
 // is full) and the map is copied in show(), at the frame it belongs to, so a deterministic run
@@ -68,7 +68,8 @@ cv::Mat compose_view(const ViewFrame& frame, const MapSnapshot& map, const Viewe
 class Viewer {
  public:
   /// Starts the viewer thread. Throws ConfigError for an invalid config, Error when the window is
-  /// asked for without a display or the output folder cannot be created.
+  /// asked for without a display, InputError when the images' or the video's folder cannot be
+  /// created.
   Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map);
   ~Viewer();
   Viewer(const Viewer&) = delete;
