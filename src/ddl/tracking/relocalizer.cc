@@ -114,10 +114,13 @@ bool Relocalizer::solve_pnp(Frame& frame, const std::vector<map::MapPointPtr>& m
   return true;
 }
 
-void Relocalizer::mark_found(const Frame& frame) {
-  found_.next_round();
+void mark_already_found(const Frame& frame, bool with_rejected, IdMarks& marks) {
+  marks.next_round();
   for (const map::MapPointPtr& p : frame.map_points()) {
-    if (p) found_.mark(p->id());
+    if (p) marks.mark(p->id());
+  }
+  if (with_rejected) {
+    for (map::MapPointId id : frame.rejected_points()) marks.mark(id);
   }
 }
 
@@ -131,6 +134,7 @@ RelocalizationResult Relocalizer::relocalize(Frame& frame, FrameMatcher& matcher
   for (const map::KeyFramePtr& kf : keyframes) {
     if (kf->is_bad()) continue;
     frame.clear_map_points();
+    frame.clear_rejected_points();
     const int bow_matches = matcher.match_bow(*kf, frame, config_.bow_ratio, matches_);
     if (bow_matches < config_.min_bow_matches) continue;
     if (!solve_pnp(frame, matches_)) continue;
@@ -140,15 +144,17 @@ RelocalizationResult Relocalizer::relocalize(Frame& frame, FrameMatcher& matcher
     discard_outliers(frame);
 
     if (good < config_.min_inliers) {
-      // More matches by projecting the candidate's points with the estimated pose.
-      mark_found(frame);
+      // More matches by projecting the candidate's points with the estimated pose. Not searched:
+      // the PnP inliers, including those the optimisation has just rejected (ORB-SLAM2's sFound).
+      mark_already_found(frame, /*with_rejected=*/true, found_);
       const int added = matcher.match_keyframe_projection(
           frame, *kf, found_, config_.search_radius_px, config_.search_max_distance);
       if (added + good >= config_.min_inliers) {
         good = estimator.optimize(frame);
         if (good > config_.retry_inliers && good < config_.min_inliers) {
-          // Almost there: a narrower search around the better pose.
-          mark_found(frame);
+          // Almost there: a narrower search around the better pose. Not searched: the current
+          // matches, outliers of the last optimisation included (they are still in their slots).
+          mark_already_found(frame, /*with_rejected=*/false, found_);
           const int more = matcher.match_keyframe_projection(
               frame, *kf, found_, config_.retry_radius_px, config_.retry_max_distance);
           if (good + more >= config_.min_inliers) good = estimator.optimize(frame);

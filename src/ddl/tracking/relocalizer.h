@@ -30,6 +30,12 @@ struct RelocalizationResult {
   map::KeyFramePtr keyframe;  // the candidate that relocalized the frame
 };
 
+/// Starts a new round of `marks` and marks the map points the frame holds, and with
+/// `with_rejected` also those its pose estimation rejected (Frame::rejected_points): the points a
+/// projection search must not match again. ORB-SLAM2's relocalization excludes all PnP inliers
+/// from its first projection search, those the pose optimisation then rejected included.
+void mark_already_found(const Frame& frame, bool with_rejected, IdMarks& marks);
+
 class Relocalizer {
  public:
   Relocalizer(const RelocalizationConfig& config, int bow_levels_up,
@@ -48,8 +54,6 @@ class Relocalizer {
  private:
   /// PnP RANSAC on the BoW matches; sets the frame's pose and keeps only the RANSAC inliers.
   bool solve_pnp(Frame& frame, const std::vector<map::MapPointPtr>& matches);
-  /// Marks the frame's current matches in found_ (a new round).
-  void mark_found(const Frame& frame);
 
   RelocalizationConfig config_;
   int bow_levels_up_;
