@@ -19,6 +19,7 @@
 #include "commands.h"
 #include "ddl/config/dataset_config.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/eval/benchmark_tables.h"
 #include "ddl/io/dataset_factory.h"
 #include "run_command.h"
@@ -130,9 +131,7 @@ int bench(const BenchArgs& args) {
   json skipped = json::array();
   const std::vector<Sequence> sequences = collect_sequences(args, skipped);
   const fs::path out_dir(args.output_dir);
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
+  create_folder(out_dir, "the benchmark's outputs");
 
   // The settings are the same for every sequence: a bad --config, --mode or --segmentation is
   // reported once, as bad input (exit 2), before any run.

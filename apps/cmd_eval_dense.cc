@@ -15,6 +15,7 @@
 #include "commands.h"
 #include "ddl/config/dataset_config.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/eval/dense_eval.h"
 #include "ddl/octomap/octree_map.h"
 
@@ -62,9 +63,7 @@ int run_eval_dense(const EvalDenseArgs& args) {
   std::fputs(eval::format_dense_report(result).c_str(), stdout);
   std::fflush(stdout);
   if (!args.json_path.empty()) {
-    if (fs::path(args.json_path).has_parent_path()) {
-      fs::create_directories(fs::path(args.json_path).parent_path());
-    }
+    create_parent_folder(args.json_path, "the JSON report");
     std::ofstream file(args.json_path);
     file << eval::to_json(result).dump(2) << '\n';
     if (!file) throw InputError::at(args.json_path, "cannot write");

@@ -18,6 +18,7 @@
 #include "ddl/config/dataset_config.h"
 #include "ddl/config/system_config.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/io/dataset_factory.h"
 #include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/pipeline/sequence_runner.h"
@@ -129,11 +130,7 @@ RunResult run_sequence_command(const RunArgs& args,
 
   if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
-  std::error_code dir_error;
-  fs::create_directories(args.output_dir, dir_error);
-  if (dir_error) {
-    throw InputError::at(args.output_dir, "cannot create output folder: " + dir_error.message());
-  }
+  create_folder(args.output_dir, "the run's outputs");
   {
     const fs::path config_out = fs::path(args.output_dir) / "config.yaml";
     std::ofstream file(config_out);

@@ -15,6 +15,7 @@
 #include "commands.h"
 #include "ddl/config/dataset_config.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/core/timing.h"
 #include "ddl/synthetic/preview.h"
 #include "ddl/synthetic/sequence.h"
@@ -89,8 +90,7 @@ void write_preview(const synthetic::SequenceSource& source, const SynthArgs& arg
   cv::Mat picture = synthetic::make_preview(frame, source.camera().depth_factor);
   // 32 levels per channel: the documentation pictures stay well under 300 KB as PNG.
   picture &= cv::Scalar(0xf8, 0xf8, 0xf8);
-  std::error_code ec;
-  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path(), ec);
+  create_parent_folder(path, "the preview image");
   if (!cv::imwrite(path, picture, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
     throw InputError::at(path, "cannot write the preview image");
   }

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/eval/stats.h"
 
 namespace ddl::eval {
@@ -442,11 +443,7 @@ std::string render_svg(const Figure& f) {
 }
 
 std::vector<std::string> write_figure(const Figure& figure, const std::string& stem) {
-  const std::filesystem::path p(stem);
-  if (p.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(p.parent_path(), ec);
-  }
+  create_parent_folder(stem, "the plots");
   const std::string png = stem + ".png";
   const std::string svg = stem + ".svg";
   bool ok = false;

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 
 namespace ddl::eval {
 namespace {
@@ -165,11 +166,7 @@ json to_json(const EvalResult& r) {
 }
 
 void write_json_report(const std::string& path, const EvalResult& result) {
-  const std::filesystem::path p(path);
-  if (p.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(p.parent_path(), ec);
-  }
+  create_parent_folder(path, "the evaluation report");
   std::ofstream file(path, std::ios::trunc);
   if (!file) throw InputError::at(path, "cannot open for writing");
   file << to_json(result).dump(1) << '\n';

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/io/text_table.h"
 
 namespace ddl::io {
@@ -69,11 +70,7 @@ Trajectory read_tum_trajectory(const std::string& path) {
 
 void write_tum_trajectory(const std::string& path, const Trajectory& trajectory,
                           const std::string& header_comment) {
-  const std::filesystem::path p(path);
-  if (p.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(p.parent_path(), ec);
-  }
+  create_parent_folder(path, "the trajectory");
   std::ofstream file(path, std::ios::trunc);
   if (!file) throw InputError::at(path, "cannot open for writing");
   if (!header_comment.empty()) file << "# " << header_comment << '\n';

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/tracking/trajectory_recorder.h"
 
 #ifdef __linux__
@@ -38,7 +39,9 @@ DenseMapper::DenseMapper(const DenseMapperConfig& config, const camera::PinholeC
   config_.validate();
   if (config_.octomap_enabled)
     octree_ = std::make_unique<octomap::OctreeMap>(config_.octree, camera_);
-  if (!config_.save_inpainted_dir.empty()) fs::create_directories(config_.save_inpainted_dir);
+  if (!config_.save_inpainted_dir.empty()) {
+    create_folder(config_.save_inpainted_dir, "the inpainted frames");
+  }
   if (config_.threaded) {
     queue_ = std::make_unique<BoundedQueue<Item>>(config_.queue_capacity);
     thread_ = std::thread([this] { worker(); });
@@ -209,7 +212,7 @@ void DenseMapper::rebuild_octree() {
 std::vector<std::string> DenseMapper::write_outputs(const std::string& dir) const {
   std::vector<std::string> written;
   if (!octree_) return written;
-  fs::create_directories(dir);
+  create_folder(dir, "the octree map");
   const fs::path d(dir);
   octree_->write_ot((d / "map.ot").string());
   octree_->write_bt((d / "map.bt").string());

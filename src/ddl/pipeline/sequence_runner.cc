@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/eval/evaluate.h"
 #include "ddl/eval/plot.h"
 #include "ddl/eval/report.h"
@@ -64,9 +65,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
 RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const RunOptions& options,
                         const std::atomic<bool>* stop, const ProgressFn& progress) {
   const fs::path out_dir(options.output_dir);
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw InputError::at(out_dir.string(), "cannot create output folder: " + ec.message());
+  create_folder(out_dir, "the run's outputs");
 
   if (options.first_frame > 0 && options.first_frame >= dataset.size()) {
     throw ConfigError::for_key("first_frame (--first-frame)",
@@ -187,7 +186,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       const eval::EvalResult result = eval::evaluate(
           io::read_tum_trajectory(*gt), system.camera_trajectory(), {}, *gt, camera_path.string());
       const fs::path eval_dir = out_dir / "eval";
-      fs::create_directories(eval_dir, ec);
+      create_folder(eval_dir, "the evaluation");
       eval::write_json_report((eval_dir / "eval.json").string(), result);
       eval::write_eval_plots(result, eval_dir.string());
       nlohmann::json ev = eval::to_json(result);

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/dynamics/mask_fusion.h"
 
 namespace ddl::pipeline {
@@ -62,8 +63,7 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
   if (config_.save_masks && !config_.output_dir.empty()) {
     for (const char* part : {"cnn", "geometry", "memory"}) {
-      std::filesystem::create_directories(std::filesystem::path(config_.output_dir) / "masks" /
-                                          part);
+      create_folder(std::filesystem::path(config_.output_dir) / "masks" / part, "the masks");
     }
   }
   if (config_.mode == RunMode::kThreaded) {

@@ -7,6 +7,7 @@
 #include <future>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/io/trajectory_io.h"
 #include "ddl/synthetic/png_writer.h"
 #include "ddl/synthetic/random.h"
@@ -138,13 +139,11 @@ std::unique_ptr<SequenceSource> make_sequence_source(const SequenceConfig& confi
 void write_sequence(const SequenceSource& source, const std::string& out_dir,
                     const WriteOptions& options) {
   const fs::path out(out_dir);
-  std::error_code ec;
   const bool with_void = !source.config().void_boxes_w.empty();
   for (const char* sub :
        {"rgb", "depth", "dynamic_mask", "void_mask", "background/rgb", "background/depth"}) {
     if (!with_void && std::string(sub) == "void_mask") continue;
-    fs::create_directories(out / sub, ec);
-    if (ec) throw InputError::at((out / sub).string(), "cannot create folder: " + ec.message());
+    create_folder(out / sub, "the sequence's images");
   }
   Lists lists;
   const std::size_t total = source.frame_count();

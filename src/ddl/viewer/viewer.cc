@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/viewer/frame_drawer.h"
 
 namespace fs = std::filesystem;
@@ -22,16 +23,6 @@ namespace ddl::viewer {
 namespace {
 
 constexpr const char* kWindowName = "DDL-SLAM";
-
-// Creates `folder` (and its parents) for the viewer's `what`; InputError naming it otherwise.
-void create_folder(const fs::path& folder, const std::string& what) {
-  std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (ec || !fs::is_directory(folder)) {
-    throw InputError::at(folder.string(), "cannot create the folder of the viewer's " + what +
-                                              ": " + (ec ? ec.message() : "not a folder"));
-  }
-}
 
 }  // namespace
 
@@ -129,9 +120,9 @@ Viewer::Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map)
       throw Error("only one viewer window per process (OpenCV's Qt backend serves one thread)");
     }
   }
-  if (!config_.output_dir.empty()) create_folder(config_.output_dir, "images");
+  if (!config_.output_dir.empty()) create_folder(config_.output_dir, "the viewer's images");
   const fs::path video_folder = fs::path(config_.video_path).parent_path();
-  if (!video_folder.empty()) create_folder(video_folder, "video");
+  if (!video_folder.empty()) create_folder(video_folder, "the viewer's video");
   thread_ = std::thread([this] { run(); });
 }
 
