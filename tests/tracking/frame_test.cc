@@ -171,13 +171,19 @@ TEST(FrameTest, UnprojectsKeypointsIntoTheWorld) {
   EXPECT_TRUE((frame.camera_center_w() - seq.T_w_c[5].translation()).norm() < 1e-12);
 }
 
+// The room's first frame at its ground-truth pose.
+Frame first_room_frame_at_truth() {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  Frame frame = builder.build(room_sequence().frames[0], cv::Mat(), 0);
+  frame.set_T_c_w(room_sequence().T_w_c[0].inverse());
+  return frame;
+}
+
 // The local keyframe set of a frame whose points more keyframes observe than the set's bound.
 TEST(LocalMapTest, KeyframesObservingTheFramesPointsAllStayBeyondTheBound) {
   const TrackerConfig config = testing::test_tracker_config();
-  FrameBuilder builder(test_camera(), config.orb, config.frame);
-  const auto& seq = room_sequence();
-  Frame frame = builder.build(seq.frames[0], cv::Mat(), 0);
-  frame.set_T_c_w(seq.T_w_c[0].inverse());
+  Frame frame = first_room_frame_at_truth();
   ASSERT_GT(frame.size(), 300u);
   // 120 keyframes (ids 0..119), keyframe k observing the points of keypoints 2k and 2k + 1;
   // the newest, 119, also observes 60 more points: it is the reference.
@@ -211,11 +217,7 @@ TEST(LocalMapTest, KeyframesObservingTheFramesPointsAllStayBeyondTheBound) {
 // image offers each of its points at the keypoint it came from, so a rejected point left unmarked
 // is matched straight back into the frame.
 TEST(RelocalizerTest, TheFirstProjectionSearchSkipsThePointsTheOptimisationRejected) {
-  const TrackerConfig config = testing::test_tracker_config();
-  FrameBuilder builder(test_camera(), config.orb, config.frame);
-  const auto& seq = room_sequence();
-  Frame frame = builder.build(seq.frames[0], cv::Mat(), 0);
-  frame.set_T_c_w(seq.T_w_c[0].inverse());
+  Frame frame = first_room_frame_at_truth();
   ASSERT_GT(frame.size(), 300u);
   auto keyframe = std::make_shared<map::KeyFrame>(
       0, 0.0, std::make_shared<map::FrameFeatures>(frame.features()), frame.T_c_w());
