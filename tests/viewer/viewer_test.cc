@@ -2,6 +2,7 @@
 
 #include "ddl/viewer/viewer.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -256,6 +257,35 @@ TEST_F(ViewerImages, EveryNthFrameIsWrittenWithBothPanels) {
     EXPECT_EQ(image.rows, 120 + kStatusBarPx);
   }
   EXPECT_FALSE(fs::exists(dir_ / "frame_000001.png"));
+}
+
+// show() keeps the frame as it was: the caller (whose images other stages share) may reuse or
+// change its pixels at once. Twenty frames outpace the drawing thread, so most are drawn after
+// the caller has blackened its images.
+TEST_F(ViewerImages, AFrameIsDrawnAsItWasWhenItWasShown) {
+  auto map = std::make_shared<map::Map>();
+  Viewer viewer(image_config(100, 32), map);
+  for (std::size_t i = 0; i < 20; ++i) {
+    ViewFrame frame = grey_frame(i);
+    frame.cnn = cv::Mat::zeros(120, 160, CV_8UC1);
+    frame.cnn(cv::Rect(10, 10, 20, 20)).setTo(255);
+    cv::Mat rgb = frame.rgb;  // the caller's buffers
+    cv::Mat cnn = frame.cnn;
+    viewer.show(std::move(frame));
+    rgb.setTo(cv::Scalar::all(0));
+    cnn.setTo(0);
+  }
+  viewer.finish();
+  ASSERT_EQ(viewer.frames_drawn(), 20u);
+  for (std::size_t i = 0; i < 20; ++i) {
+    const std::string name = fmt::format("frame_{:06d}.png", i);
+    const cv::Mat image = cv::imread((dir_ / name).string());
+    ASSERT_FALSE(image.empty()) << name;
+    const cv::Vec3b grey = pixel(image, 100, 100);
+    const cv::Vec3b tinted = pixel(image, 15, 15);
+    EXPECT_EQ(grey, cv::Vec3b(100, 100, 100)) << name;
+    EXPECT_NE(tinted, grey) << name << ": the CNN mask is tinted";
+  }
 }
 
 TEST_F(ViewerImages, TheMapIsDrawnAsItWasWhenTheFrameWasShown) {

@@ -138,6 +138,13 @@ void Viewer::show(ViewFrame frame) {
   check_error();
   if (finished_) throw Error("Viewer::show after finish()");
   if (frame.index % static_cast<std::size_t>(config_.every_n_frames) != 0) return;
+  // The viewer's thread draws from its own pixels. The caller's images share their buffers with
+  // the other stages (the dense stage keeps the keyframes' images): the caller may change them,
+  // and the stage releasing a buffer last would free it under the viewer through OpenCV's
+  // reference count, which ThreadSanitizer cannot see (libopencv_core is not instrumented).
+  for (cv::Mat* image : {&frame.rgb, &frame.cnn, &frame.geometry, &frame.memory}) {
+    *image = image->clone();
+  }
   Item item{std::move(frame), std::nullopt};
   if (lossless_) {
     item.map = snapshot_map(*map_);
