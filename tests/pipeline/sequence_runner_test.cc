@@ -1,5 +1,5 @@
-// run_sequence's per-frame callback: it sees every processed frame with its outcome, and
-// returning false stops the run like Ctrl-C, with the outputs so far written.
+// run_sequence: its per-frame callback sees every processed frame with its outcome, and returning
+// false stops the run like Ctrl-C, with the outputs so far written; its summary times each stage.
 
 #include "ddl/pipeline/sequence_runner.h"
 
@@ -76,6 +76,38 @@ TEST(SequenceRunner, TheFrameCallbackSeesEveryFrameAndCanStopTheRun) {
   EXPECT_GT(matched_keypoints, 7u * 100u);  // frames 1-7 track against the map
   // The frames processed before the stop are written.
   EXPECT_EQ(pose_lines(out / "CameraTrajectory.txt"), 8u);
+  fs::remove_all(out);
+}
+
+// Every keyframe's local mapping is timed as a whole and stage by stage; the stages lie within
+// the whole.
+TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 40));
+  const MemoryDataset dataset(*source);
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_timings";
+  fs::remove_all(out);
+
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  RunOptions options;
+  options.output_dir = out.string();
+  options.evaluate = false;
+  const RunOutcome outcome = run_sequence(dataset, system, options);
+  const nlohmann::json& timing = outcome.summary["timing_ms"];
+  ASSERT_TRUE(timing.contains("local_mapping")) << timing.dump();
+  const auto keyframes = timing["local_mapping"]["count"].get<std::size_t>();
+  EXPECT_GE(keyframes, 2u);
+  double stages_ms = 0.0;
+  for (const char* stage :
+       {"insertion", "point_culling", "triangulation", "fusion", "local_ba", "keyframe_culling"}) {
+    const std::string key = std::string("local_mapping.") + stage;
+    ASSERT_TRUE(timing.contains(key)) << key;
+    EXPECT_EQ(timing[key]["count"].get<std::size_t>(), keyframes) << key;
+    stages_ms += timing[key]["mean_ms"].get<double>();
+  }
+  EXPECT_GT(timing["local_mapping.local_ba"]["mean_ms"].get<double>(), 0.0);
+  EXPECT_LE(stages_ms, timing["local_mapping"]["mean_ms"].get<double>());
   fs::remove_all(out);
 }
 

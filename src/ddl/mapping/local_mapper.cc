@@ -137,6 +137,10 @@ int LocalMapper::fuse_with_neighbours(const map::KeyFramePtr& keyframe) {
 map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
                                       const std::atomic<bool>* abort) {
   apply_pending_reset();
+  {
+    std::lock_guard lock(stats_mutex_);
+    stats_.last_timings.reset();
+  }
   if (!keyframe || keyframe->id() < first_valid_keyframe_) return nullptr;
   LocalMapperTimings timings;
   Stopwatch watch;

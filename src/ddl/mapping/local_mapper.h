@@ -50,7 +50,8 @@ struct LocalMapperStatistics {
   std::size_t local_ba_aborted = 0;
   std::size_t outliers_erased = 0;  // associations removed after local BA
   LocalBaStatistics last_local_ba;
-  LocalMapperTimings last_timings;  // of the last process() call
+  /// Of the last process() call; empty when that call dropped its keyframe unprocessed.
+  std::optional<LocalMapperTimings> last_timings;
 };
 
 class LocalMapper {

@@ -282,10 +282,23 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   return outcome;
 }
 
+void System::record_local_mapping(double total_ms) {
+  timings_.record("local_mapping", total_ms);
+  const std::optional<mapping::LocalMapperTimings> stages = mapper_->statistics().last_timings;
+  if (!stages) return;  // the keyframe belonged to a map that was reset
+  const mapping::LocalMapperTimings& t = *stages;
+  timings_.record("local_mapping.insertion", t.insertion_ms);
+  timings_.record("local_mapping.point_culling", t.point_culling_ms);
+  timings_.record("local_mapping.triangulation", t.triangulation_ms);
+  timings_.record("local_mapping.fusion", t.fusion_ms);
+  timings_.record("local_mapping.local_ba", t.local_ba_ms);
+  timings_.record("local_mapping.keyframe_culling", t.keyframe_culling_ms);
+}
+
 void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {
   Stopwatch watch;
   map::KeyFramePtr kept = mapper_->process(keyframe, nullptr);
-  timings_.record("local_mapping", watch.elapsed_ms());
+  record_local_mapping(watch.elapsed_ms());
   if (!kept) return;
   watch.reset();
   loop_closer_->process(kept);
@@ -299,7 +312,7 @@ void System::mapping_worker() {
       mapping_gate_.begin_keyframe();
       Stopwatch watch;
       map::KeyFramePtr kept = mapper_->process(*keyframe, mapping_gate_.abort_flag());
-      timings_.record("local_mapping", watch.elapsed_ms());
+      record_local_mapping(watch.elapsed_ms());
       mapping_gate_.end_keyframe();
       mapper_busy_.store(false);
       if (kept && !loop_queue_->push(kept)) break;

@@ -116,6 +116,8 @@ class System {
   void mapping_worker();
   void loop_worker();
   void handle_keyframe_inline(const map::KeyFramePtr& keyframe);
+  /// Records the local mapping of one keyframe: its total and the mapper's stages.
+  void record_local_mapping(double total_ms);
   /// Geometry check and dynamic-memory recall at the low-cost pose of `current` (filling
   /// masks.geometry and masks.memory) and removal of the features in their exclusion mask, which
   /// it returns (empty when neither ran).
