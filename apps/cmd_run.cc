@@ -148,6 +148,7 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.output_dir = args.output_dir;
   run_options.first_frame = args.first_frame;
   run_options.max_frames = args.max_frames;
+  run_options.playback_rate = args.playback_rate;
   run_options.evaluate = !args.no_eval;
   // Ground-truth dynamic masks (sequences written by `ddl_slam synth`): mask quality metrics.
   std::unique_ptr<pipeline::MaskEvaluator> mask_evaluator;
@@ -259,6 +260,11 @@ void add_run_command(CLI::App& app, int& exit_code) {
                   "Shared data folder (models); default $DDL_SHARED_DIR or ../shared");
   cmd->add_option("--first-frame", args->first_frame, "Skip the frames before this index");
   cmd->add_option("--max-frames", args->max_frames, "Process at most this many frames (0 = all)");
+  cmd->add_option("--playback-rate", args->playback_rate,
+                  "Feed the frames at RATE times the pace of their timestamps, as a live camera "
+                  "delivers them (1 = real time; none is dropped: summary.json's timing_ms.latency "
+                  "tells how far behind they were handled); 0 (default): as fast as they are taken")
+      ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-dynamic", args->no_dynamic,
                 "Plain SLAM core without dynamic-content removal (the paper's ORB-SLAM2 column)");
   cmd->add_flag("--no-loop", args->no_loop, "Disable loop closing");

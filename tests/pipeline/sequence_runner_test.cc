@@ -111,5 +111,41 @@ TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {
   fs::remove_all(out);
 }
 
+// A paced run takes at least the span of its stamps over the rate, records each frame's latency
+// and, in deterministic mode, gives the trajectory of the run that was not paced.
+TEST(SequenceRunner, APacedRunFollowsTheStampsAndKeepsTheTrajectory) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 20));
+  const MemoryDataset dataset(*source);
+  const double span_s = dataset.timestamp(19) - dataset.timestamp(0);
+  ASSERT_GT(span_s, 0.5);
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_paced";
+  fs::remove_all(out);
+
+  auto run = [&](double rate, const std::string& name) {
+    System system(testing::core_config(), dataset.camera(), vocabulary);
+    RunOptions options;
+    options.output_dir = (out / name).string();
+    options.evaluate = false;
+    options.playback_rate = rate;
+    return run_sequence(dataset, system, options).summary;
+  };
+  const nlohmann::json fast = run(0.0, "fast");
+  const nlohmann::json paced = run(2.0, "paced");
+  EXPECT_TRUE(fast["playback_rate"].is_null());
+  EXPECT_FALSE(fast["timing_ms"].contains("latency"));
+  EXPECT_EQ(paced["playback_rate"].get<double>(), 2.0);
+  EXPECT_GE(paced["wall_time_s"].get<double>(), span_s / 2.0);
+  EXPECT_EQ(paced["timing_ms"]["latency"]["count"].get<std::size_t>(), 20u);
+  auto read = [](const fs::path& path) {
+    std::ifstream file(path);
+    return std::string(std::istreambuf_iterator<char>(file), {});
+  };
+  EXPECT_EQ(read(out / "fast" / "CameraTrajectory.txt"),
+            read(out / "paced" / "CameraTrajectory.txt"));
+  fs::remove_all(out);
+}
+
 }  // namespace
 }  // namespace ddl::pipeline

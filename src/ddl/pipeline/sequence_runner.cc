@@ -12,6 +12,7 @@
 #include "ddl/eval/plot.h"
 #include "ddl/eval/report.h"
 #include "ddl/eval/tracked.h"
+#include "ddl/pipeline/frame_pacer.h"
 #include "ddl/pipeline/frame_prefetcher.h"
 #include "ddl/pipeline/segmentation_stage.h"
 
@@ -90,12 +91,28 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   double caller_cpu_s = 0.0;  // this thread: tracking (deterministic mode: every stage inline)
   double input_done_s = 0.0;  // wall time when the last frame was processed (before shutdown)
   MaskEvaluator* const masks = system.config().dynamic.enabled ? options.mask_evaluator : nullptr;
+  std::optional<FramePacer> pacer;
+  if (options.playback_rate > 0.0) pacer.emplace(options.playback_rate, stop);
+  TimingStats latency;  // paced runs: from a frame's due time to the end of its tracking
   try {
     FramePrefetcher prefetcher(dataset, begin, end);
     // CNN masks computed ahead of tracking in their own thread, in both modes (they depend only
-    // on the frame). Destroyed before the prefetcher it reads from.
-    SegmentationStage segmentation([&] { return prefetcher.next(); },
-                                   [&](const io::RgbdFrame& f) { return system.segment(f); });
+    // on the frame). Destroyed before the prefetcher it reads from. A paced run releases each
+    // frame to it when the camera would have delivered it.
+    SegmentationStage segmentation(
+        [&] {
+          std::optional<io::RgbdFrame> next = prefetcher.next();
+          if (next && pacer) pacer->wait_for(next->timestamp_s);
+          return next;
+        },
+        [&](const io::RgbdFrame& f) { return system.segment(f); });
+    // Destroyed first: a stage that stops early must not wait for a frame's due time.
+    const struct CancelPacing {
+      FramePacer* pacer;
+      ~CancelPacing() {
+        if (pacer != nullptr) pacer->cancel();
+      }
+    } cancel_pacing{pacer ? &*pacer : nullptr};
     while (true) {
       if (stop != nullptr && stop->load()) {
         outcome.interrupted = true;
@@ -107,6 +124,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       if (!segmented) break;
       std::optional<io::RgbdFrame> frame = std::move(segmented->frame);
       const FrameOutcome result = system.process(*frame, std::move(segmented->cnn));
+      if (pacer) latency.record("latency", pacer->latency_ms(frame->timestamp_s));
       if (masks != nullptr) masks->add(*frame, result.masks);
       ++done;
       const bool go_on = !options.on_frame || options.on_frame(*frame, result);
@@ -155,6 +173,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["frames_in_sequence"] = dataset.size();
   summary["frames_processed"] = done;
   summary["interrupted"] = outcome.interrupted;
+  summary["playback_rate"] = pacer ? nlohmann::json(options.playback_rate) : nlohmann::json();
   summary["failed"] = error != nullptr;
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
@@ -169,6 +188,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   nlohmann::json timing = timings_to_json(system.timings());
   timing.update(timings_to_json(system.dense_mapper().timings()));
   timing.update(timings_to_json(input_timings));
+  timing.update(timings_to_json(latency));
   summary["timing_ms"] = timing;
   summary["dynamic"] = {{"enabled", system.config().dynamic.enabled},
                         {"segmenter", system.dynamic_front_end().segmenter_description()},

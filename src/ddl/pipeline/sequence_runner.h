@@ -26,6 +26,9 @@ struct RunOptions {
   std::size_t first_frame = 0;         // skip frames before this index
   std::size_t max_frames = 0;          // 0 = all frames
   bool evaluate = true;                // evaluate against ground truth when the dataset has it
+  /// > 0: frames are fed at this multiple of the camera's pace, as a live camera would deliver
+  /// them (1 = real time; FramePacer); 0: as fast as the pipeline takes them.
+  double playback_rate = 0.0;
   /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
   /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).
   MaskEvaluator* mask_evaluator = nullptr;
