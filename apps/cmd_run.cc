@@ -149,6 +149,7 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.first_frame = args.first_frame;
   run_options.max_frames = args.max_frames;
   run_options.playback_rate = args.playback_rate;
+  run_options.drop_late_frames = args.drop_late_frames;
   run_options.evaluate = !args.no_eval;
   // Ground-truth dynamic masks (sequences written by `ddl_slam synth`): mask quality metrics.
   std::unique_ptr<pipeline::MaskEvaluator> mask_evaluator;
@@ -265,6 +266,10 @@ void add_run_command(CLI::App& app, int& exit_code) {
                   "delivers them (1 = real time; none is dropped: summary.json's timing_ms.latency "
                   "tells how far behind they were handled); 0 (default): as fast as they are taken")
       ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_flag("--drop-late-frames", args->drop_late_frames,
+                "With --playback-rate: drop the frames the pipeline is too busy to take, as a live "
+                "camera with a one-frame buffer does (latency stays bounded; which frames are "
+                "dropped depends on timing, so runs differ; summary.json frames_dropped)");
   cmd->add_flag("--no-dynamic", args->no_dynamic,
                 "Plain SLAM core without dynamic-content removal (the paper's ORB-SLAM2 column)");
   cmd->add_flag("--no-loop", args->no_loop, "Disable loop closing");

@@ -26,6 +26,7 @@ struct RunArgs {
   std::size_t max_frames = 0;
   std::size_t first_frame = 0;
   double playback_rate = 0.0;  // 0: as fast as possible; 1: real time
+  bool drop_late_frames = false;
   bool no_eval = false;
   bool no_dynamic = false;
   bool no_loop = false;

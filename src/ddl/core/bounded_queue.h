@@ -30,6 +30,18 @@ class BoundedQueue {
     return true;
   }
 
+  /// Never blocks: when full, the oldest items make room (a camera's frame buffer keeps the
+  /// newest frames). Returns how many were displaced, std::nullopt (item dropped) when closed.
+  std::optional<std::size_t> push_displacing_oldest(T item) {
+    std::lock_guard lock(mutex_);
+    if (closed_) return std::nullopt;
+    std::size_t displaced = 0;
+    for (; items_.size() >= capacity_; ++displaced) items_.pop_front();
+    items_.push_back(std::move(item));
+    not_empty_.notify_one();
+    return displaced;
+  }
+
   /// Never blocks. Returns false when full or closed.
   bool try_push(T item) {
     std::lock_guard lock(mutex_);

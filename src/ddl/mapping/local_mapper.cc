@@ -176,7 +176,7 @@ map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
       ba = run_local_bundle_adjustment(keyframe, *map_, camera_, config_.optimizer, abort,
                                        static_cast<std::size_t>(config_.local_ba_max_keyframes));
     }
-    timings.local_ba_ms = watch.elapsed_ms();
+    if (ba.ran) timings.local_ba_ms = watch.elapsed_ms();
     watch.reset();
     culled_keyframes = cull_redundant_keyframes(keyframe, *map_, *database_, close_depth_m_,
                                                 config_.keyframe_culling);
@@ -191,8 +191,8 @@ map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
       keyframe->id(), culled_points, created.created.size(), fused, ba.ran ? "ran" : "skipped",
       ba.free_keyframes, ba.fixed_keyframes, ba.points, ba.outliers_erased,
       ba.aborted ? ", aborted" : "", culled_keyframes.size(), timings.insertion_ms,
-      timings.point_culling_ms, timings.triangulation_ms, timings.fusion_ms, timings.local_ba_ms,
-      timings.keyframe_culling_ms);
+      timings.point_culling_ms, timings.triangulation_ms, timings.fusion_ms.value_or(0.0),
+      timings.local_ba_ms.value_or(0.0), timings.keyframe_culling_ms.value_or(0.0));
   {
     std::lock_guard lock(stats_mutex_);
     ++stats_.keyframes_processed;

@@ -30,13 +30,15 @@
 namespace ddl::mapping {
 
 /// Wall-clock time of each step of one process() call [ms].
+/// Stages that did not run for a keyframe (stopped by the abort flag; local BA off or with too
+/// few keyframes) are empty.
 struct LocalMapperTimings {
   double insertion_ms = 0.0;  // BoW, observations, covisibility, database
   double point_culling_ms = 0.0;
   double triangulation_ms = 0.0;
-  double fusion_ms = 0.0;
-  double local_ba_ms = 0.0;  // including the gathering and the write-back
-  double keyframe_culling_ms = 0.0;
+  std::optional<double> fusion_ms;
+  std::optional<double> local_ba_ms;  // including the gathering and the write-back
+  std::optional<double> keyframe_culling_ms;
 };
 
 /// Counters over all keyframes processed so far.

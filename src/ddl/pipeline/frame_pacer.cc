@@ -17,31 +17,41 @@ constexpr auto kStopPollInterval = std::chrono::milliseconds(50);
 }  // namespace
 
 FramePacer::FramePacer(double rate, const std::atomic<bool>* stop) : rate_(rate), stop_(stop) {
-  if (!std::isfinite(rate) || rate <= 0.0) {
-    throw ConfigError::for_key("--playback-rate",
-                               fmt::format("must be a positive number, got {}", rate));
+  if (!(rate >= kMinRate && rate <= kMaxRate)) {  // NaN fails too
+    throw ConfigError::for_key(
+        "--playback-rate", fmt::format("must be in [{}, {}], got {}", kMinRate, kMaxRate, rate));
   }
 }
 
 FramePacer::Clock::time_point FramePacer::due(double timestamp_s) const {
-  const double offset_s = std::max(0.0, timestamp_s - *first_stamp_s_) / rate_;
+  // Clamped to a year: a wild stamp must not overflow the clock's 64-bit nanoseconds.
+  constexpr double kMaxOffsetS = 365.0 * 24.0 * 3600.0;
+  const double offset_s = std::clamp((timestamp_s - *first_stamp_s_) / rate_, 0.0, kMaxOffsetS);
   return start_ +
          std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(offset_s));
 }
 
-void FramePacer::wait_for(double timestamp_s) {
+bool FramePacer::wait_for(double timestamp_s) {
   std::unique_lock lock(mutex_);
+  const auto ended = [&] { return cancelled_ || (stop_ != nullptr && stop_->load()); };
+  if (ended()) return false;
   if (!first_stamp_s_) {
     first_stamp_s_ = timestamp_s;
     start_ = Clock::now();
-    return;
+    return true;
   }
   const Clock::time_point until = due(timestamp_s);
-  while (!cancelled_ && (stop_ == nullptr || !stop_->load())) {
+  while (!ended()) {
     const Clock::time_point now = Clock::now();
-    if (now >= until) return;
+    if (now >= until) return true;
     wake_.wait_until(lock, std::min(until, now + kStopPollInterval));
   }
+  return false;
+}
+
+bool FramePacer::is_due(double timestamp_s) const {
+  std::lock_guard lock(mutex_);
+  return first_stamp_s_ && Clock::now() >= due(timestamp_s);
 }
 
 double FramePacer::latency_ms(double timestamp_s, Clock::time_point now) const {

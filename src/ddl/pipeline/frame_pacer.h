@@ -2,9 +2,12 @@
 // Feeds a recorded sequence at the pace of a live camera: the frame stamped t is released no
 // earlier than start + (t - t0) / rate, where t0 is the first frame's stamp and start the wall
 // time at which it was released. rate 1 is real time, 2 twice as fast. No frame is dropped: a
-// frame that is due already goes at once, and the pipeline falls behind (ORB-SLAM2's rgbd_tum
-// example paces the same way). latency_ms() tells how far behind a frame was handled.
-// Thread-safety: wait_for() from one thread; latency_ms() and cancel() from any.
+// frame that is due already goes at once, and the pipeline falls behind (FramePrefetcher's live
+// mode drops frames instead). The schedule is absolute, as a camera's: after a stall the overdue
+// frames follow each other at once. ORB-SLAM2's rgbd_tum example paces relatively instead (it
+// sleeps after each frame for what is left of its interval); the two agree while the pipeline
+// keeps up. latency_ms() tells how far behind a frame was handled.
+// Thread-safety: wait_for() from one thread, the other methods from any.
 
 #include <atomic>
 #include <chrono>
@@ -17,14 +20,21 @@ namespace ddl::pipeline {
 class FramePacer {
  public:
   using Clock = std::chrono::steady_clock;
+  static constexpr double kMinRate = 1e-3;
+  static constexpr double kMaxRate = 1e3;
 
-  /// `rate` > 0 and finite (ConfigError naming --playback-rate otherwise). `stop` (may be null)
-  /// ends a wait early, like cancel().
+  /// `rate` in [kMinRate, kMaxRate] (ConfigError naming --playback-rate otherwise). `stop` (may
+  /// be null) ends a wait early, like cancel().
   explicit FramePacer(double rate, const std::atomic<bool>* stop = nullptr);
 
-  /// Blocks until the frame stamped `timestamp_s` is due, or until cancel() or `stop`. Stamps
-  /// must not decrease (a frame stamped before its predecessor is due at once).
-  void wait_for(double timestamp_s);
+  /// Blocks until the frame stamped `timestamp_s` is due: true. False when cancel() or `stop`
+  /// ended the wait (the frame is not due; the caller should stop). A frame stamped before the
+  /// first one is due at once.
+  bool wait_for(double timestamp_s);
+
+  /// Whether the frame stamped `timestamp_s` is due now (false before the first frame was
+  /// released).
+  bool is_due(double timestamp_s) const;
 
   /// Milliseconds from the moment the frame stamped `timestamp_s` was due to `now`; 0 before the
   /// first frame was released.

@@ -65,6 +65,9 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
 
 RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const RunOptions& options,
                         const std::atomic<bool>* stop, const ProgressFn& progress) {
+  if (options.drop_late_frames && options.playback_rate <= 0.0) {
+    throw ConfigError::for_key("--drop-late-frames", "needs --playback-rate (a paced run)");
+  }
   const fs::path out_dir(options.output_dir);
   create_folder(out_dir, "the run's outputs");
 
@@ -92,21 +95,21 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   double input_done_s = 0.0;  // wall time when the last frame was processed (before shutdown)
   MaskEvaluator* const masks = system.config().dynamic.enabled ? options.mask_evaluator : nullptr;
   std::optional<FramePacer> pacer;
-  if (options.playback_rate > 0.0) pacer.emplace(options.playback_rate, stop);
-  TimingStats latency;  // paced runs: from a frame's due time to the end of its tracking
+  // Any rate but 0 (NaN and negative included) goes to the pacer, which names what is wrong.
+  if (options.playback_rate != 0.0) pacer.emplace(options.playback_rate, stop);
+  TimingStats latency;      // paced runs: from a frame's due time to the end of its tracking
+  std::size_t dropped = 0;  // live runs: frames the pipeline was too busy to take
+  std::vector<double> processed_stamps;  // not contiguous when frames were dropped
   try {
-    FramePrefetcher prefetcher(dataset, begin, end);
+    PrefetchOptions prefetch;
+    prefetch.pacer = pacer ? &*pacer : nullptr;  // a paced run loads each frame when it is due
+    prefetch.drop_late = options.drop_late_frames;
+    FramePrefetcher prefetcher(dataset, begin, end, prefetch);
     // CNN masks computed ahead of tracking in their own thread, in both modes (they depend only
-    // on the frame). Destroyed before the prefetcher it reads from. A paced run releases each
-    // frame to it when the camera would have delivered it.
-    SegmentationStage segmentation(
-        [&] {
-          std::optional<io::RgbdFrame> next = prefetcher.next();
-          if (next && pacer) pacer->wait_for(next->timestamp_s);
-          return next;
-        },
-        [&](const io::RgbdFrame& f) { return system.segment(f); });
-    // Destroyed first: a stage that stops early must not wait for a frame's due time.
+    // on the frame). Destroyed before the prefetcher it reads from.
+    SegmentationStage segmentation([&] { return prefetcher.next(); },
+                                   [&](const io::RgbdFrame& f) { return system.segment(f); });
+    // Destroyed first: the segmentation worker must not wait for a frame's due time to stop.
     const struct CancelPacing {
       FramePacer* pacer;
       ~CancelPacing() {
@@ -126,10 +129,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       const FrameOutcome result = system.process(*frame, std::move(segmented->cnn));
       if (pacer) latency.record("latency", pacer->latency_ms(frame->timestamp_s));
       if (masks != nullptr) masks->add(*frame, result.masks);
+      processed_stamps.push_back(frame->timestamp_s);
       ++done;
       const bool go_on = !options.on_frame || options.on_frame(*frame, result);
+      dropped = prefetcher.frames_dropped();
       if (progress) {
-        progress(done, total,
+        progress(done + dropped, total,
                  fmt::format("{} kf, {}", system.statistics().keyframes_created,
                              tracking::to_string(result.tracking.state)));
       }
@@ -138,6 +143,9 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
         break;
       }
     }
+    // Ctrl-C during a paced wait ends the input instead of the loop's own check.
+    if (stop != nullptr && stop->load()) outcome.interrupted = true;
+    dropped = prefetcher.frames_dropped();
     caller_cpu_s = (thread_cpu_ms() - caller_cpu_start_ms) / 1000.0;
     input_done_s = wall.elapsed_ms() / 1000.0;
     system.finish();
@@ -174,6 +182,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["frames_processed"] = done;
   summary["interrupted"] = outcome.interrupted;
   summary["playback_rate"] = pacer ? nlohmann::json(options.playback_rate) : nlohmann::json();
+  summary["frames_dropped"] = dropped;
   summary["failed"] = error != nullptr;
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
@@ -214,11 +223,6 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       // processed frames inside the ground-truth span, those with an estimated pose. Until
       // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
       // could push it above 1 (found by review).
-      std::vector<double> processed_stamps;
-      processed_stamps.reserve(done);
-      for (std::size_t i = begin; i < begin + done; ++i) {
-        processed_stamps.push_back(dataset.timestamp(i));
-      }
       const eval::TrackedStats tracked =
           eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
       ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;

@@ -290,9 +290,11 @@ void System::record_local_mapping(double total_ms) {
   timings_.record("local_mapping.insertion", t.insertion_ms);
   timings_.record("local_mapping.point_culling", t.point_culling_ms);
   timings_.record("local_mapping.triangulation", t.triangulation_ms);
-  timings_.record("local_mapping.fusion", t.fusion_ms);
-  timings_.record("local_mapping.local_ba", t.local_ba_ms);
-  timings_.record("local_mapping.keyframe_culling", t.keyframe_culling_ms);
+  // Stages that did not run for this keyframe are not samples of their cost.
+  if (t.fusion_ms) timings_.record("local_mapping.fusion", *t.fusion_ms);
+  if (t.local_ba_ms) timings_.record("local_mapping.local_ba", *t.local_ba_ms);
+  if (t.keyframe_culling_ms)
+    timings_.record("local_mapping.keyframe_culling", *t.keyframe_culling_ms);
 }
 
 void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {

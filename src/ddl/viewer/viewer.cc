@@ -138,10 +138,10 @@ void Viewer::show(ViewFrame frame) {
   check_error();
   if (finished_) throw Error("Viewer::show after finish()");
   if (frame.index % static_cast<std::size_t>(config_.every_n_frames) != 0) return;
-  // The viewer's thread draws from its own pixels. The caller's images share their buffers with
-  // the other stages (the dense stage keeps the keyframes' images): the caller may change them,
-  // and the stage releasing a buffer last would free it under the viewer through OpenCV's
-  // reference count, which ThreadSanitizer cannot see (libopencv_core is not instrumented).
+  // The viewer's thread draws from its own pixels: the caller may reuse or change its images
+  // once show() returns. It also keeps ThreadSanitizer's view clean: the buffers are shared with
+  // other stages (the dense stage keeps the keyframes' images), and the release of the last
+  // reference happens inside libopencv_core, whose atomic count TSan cannot see.
   for (cv::Mat* image : {&frame.rgb, &frame.cnn, &frame.geometry, &frame.memory}) {
     *image = image->clone();
   }
