@@ -263,12 +263,14 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--max-frames", args->max_frames, "Process at most this many frames (0 = all)");
   cmd->add_option("--playback-rate", args->playback_rate,
                   "Feed the frames at RATE times the pace of their timestamps, as a live camera "
-                  "delivers them (1 = real time; none is dropped: summary.json's timing_ms.latency "
-                  "tells how far behind they were handled); 0 (default): as fast as they are taken")
+                  "delivers them (1 = real time; none is dropped without --drop-late-frames; "
+                  "summary.json's timing_ms.latency tells how far behind they were handled); 0 "
+                  "(default): as fast as they are taken")
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--drop-late-frames", args->drop_late_frames,
-                "With --playback-rate: drop the frames the pipeline is too busy to take, as a live "
-                "camera with a one-frame buffer does (latency stays bounded; which frames are "
+                "With --playback-rate: keep only the newest frame, as a live camera with a "
+                "one-frame buffer does: a frame a newer one arrived before the pipeline took is "
+                "dropped (latency stays bounded; which frames are "
                 "dropped depends on timing, so runs differ; summary.json frames_dropped)");
   cmd->add_flag("--no-dynamic", args->no_dynamic,
                 "Plain SLAM core without dynamic-content removal (the paper's ORB-SLAM2 column)");

@@ -77,8 +77,40 @@ TEST(FramePrefetcher, LiveModeDropsWhatABusyConsumerCannotTakeAndKeepsTheNewest)
   EXPECT_EQ(taken.size() + prefetcher.frames_dropped(), 30u);
   EXPECT_GE(prefetcher.frames_dropped(), 10u);
   for (std::size_t k = 1; k < taken.size(); ++k) EXPECT_GT(taken[k], taken[k - 1]);
-  EXPECT_EQ(taken.front(), 0u);
   EXPECT_EQ(taken.back(), 29u);  // the last frame has no successor to replace it
+}
+
+// A loading error in live mode is never dropped: it reaches the consumer, naming the file.
+TEST(FramePrefetcher, ALoadingErrorInLiveModeReachesTheConsumer) {
+  class FailingDataset final : public io::DatasetReader {
+   public:
+    std::size_t size() const override { return inner_.size(); }
+    double timestamp(std::size_t i) const override { return inner_.timestamp(i); }
+    io::RgbdFrame frame(std::size_t i) const override {
+      if (i == 9) throw InputError::at("rgb/9.png", "cannot decode");  // never skipped: the last
+      return inner_.frame(i);
+    }
+    const camera::PinholeCamera& camera() const override { return inner_.camera(); }
+    std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
+    std::string name() const override { return "failing"; }
+
+   private:
+    StampDataset inner_{10};
+  };
+  const FailingDataset dataset;
+  FramePacer pacer(1.0);
+  PrefetchOptions live;
+  live.pacer = &pacer;
+  live.drop_late = true;
+  FramePrefetcher prefetcher(dataset, 0, 10, live);
+  bool thrown = false;
+  try {
+    take_all(prefetcher, std::chrono::milliseconds(100));  // slow: earlier frames are dropped
+  } catch (const InputError& e) {
+    thrown = true;
+    EXPECT_NE(std::string(e.what()).find("rgb/9.png"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(thrown);
 }
 
 TEST(FramePrefetcher, DroppingFramesNeedsAPacedRun) {

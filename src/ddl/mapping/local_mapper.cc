@@ -176,7 +176,7 @@ map::KeyFramePtr LocalMapper::process(const map::KeyFramePtr& keyframe,
       ba = run_local_bundle_adjustment(keyframe, *map_, camera_, config_.optimizer, abort,
                                        static_cast<std::size_t>(config_.local_ba_max_keyframes));
     }
-    if (ba.ran) timings.local_ba_ms = watch.elapsed_ms();
+    if (ba.ran && !ba.aborted) timings.local_ba_ms = watch.elapsed_ms();
     watch.reset();
     culled_keyframes = cull_redundant_keyframes(keyframe, *map_, *database_, close_depth_m_,
                                                 config_.keyframe_culling);

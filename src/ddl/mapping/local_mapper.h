@@ -30,8 +30,8 @@
 namespace ddl::mapping {
 
 /// Wall-clock time of each step of one process() call [ms].
-/// Stages that did not run for a keyframe (stopped by the abort flag; local BA off or with too
-/// few keyframes) are empty.
+/// Stages that did not run to completion for a keyframe (stopped by the abort flag; local BA
+/// off or with too few keyframes) are empty.
 struct LocalMapperTimings {
   double insertion_ms = 0.0;  // BoW, observations, covisibility, database
   double point_culling_ms = 0.0;

@@ -68,6 +68,14 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   if (options.drop_late_frames && options.playback_rate <= 0.0) {
     throw ConfigError::for_key("--drop-late-frames", "needs --playback-rate (a paced run)");
   }
+  // Any rate but 0 (NaN and negative included) goes to the pacer, which names what is wrong.
+  std::optional<FramePacer> pacer;
+  if (options.playback_rate != 0.0) pacer.emplace(options.playback_rate, stop);
+  if (options.drop_late_frames && system.config().mode == RunMode::kDeterministic) {
+    spdlog::warn(
+        "--drop-late-frames: which frames are dropped depends on timing, so this deterministic "
+        "run will not reproduce its trajectory");
+  }
   const fs::path out_dir(options.output_dir);
   create_folder(out_dir, "the run's outputs");
 
@@ -94,9 +102,6 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   double caller_cpu_s = 0.0;  // this thread: tracking (deterministic mode: every stage inline)
   double input_done_s = 0.0;  // wall time when the last frame was processed (before shutdown)
   MaskEvaluator* const masks = system.config().dynamic.enabled ? options.mask_evaluator : nullptr;
-  std::optional<FramePacer> pacer;
-  // Any rate but 0 (NaN and negative included) goes to the pacer, which names what is wrong.
-  if (options.playback_rate != 0.0) pacer.emplace(options.playback_rate, stop);
   TimingStats latency;      // paced runs: from a frame's due time to the end of its tracking
   std::size_t dropped = 0;  // live runs: frames the pipeline was too busy to take
   std::vector<double> processed_stamps;  // not contiguous when frames were dropped
@@ -107,8 +112,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     FramePrefetcher prefetcher(dataset, begin, end, prefetch);
     // CNN masks computed ahead of tracking in their own thread, in both modes (they depend only
     // on the frame). Destroyed before the prefetcher it reads from.
+    // Live runs keep one frame between the CNN and tracking, as few as a frame buffer would.
     SegmentationStage segmentation([&] { return prefetcher.next(); },
-                                   [&](const io::RgbdFrame& f) { return system.segment(f); });
+                                   [&](const io::RgbdFrame& f) { return system.segment(f); },
+                                   options.drop_late_frames ? 1 : 2);
     // Destroyed first: the segmentation worker must not wait for a frame's due time to stop.
     const struct CancelPacing {
       FramePacer* pacer;

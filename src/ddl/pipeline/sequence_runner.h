@@ -29,8 +29,9 @@ struct RunOptions {
   /// > 0: frames are fed at this multiple of the camera's pace, as a live camera would deliver
   /// them (1 = real time; FramePacer); 0: as fast as the pipeline takes them.
   double playback_rate = 0.0;
-  /// Paced runs only: drop frames the pipeline is too busy to take, as a live camera with a
-  /// one-frame buffer does (FramePrefetcher); latency stays bounded, the result depends on timing.
+  /// Paced runs only: keep the newest frame only, as a live camera with a one-frame buffer does
+  /// (FramePrefetcher; the segmentation stage then holds one frame ahead of tracking): latency
+  /// stays bounded, which frames are dropped depends on timing.
   bool drop_late_frames = false;
   /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
   /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).
