@@ -50,18 +50,23 @@ std::size_t pose_lines(const fs::path& trajectory) {
   return lines;
 }
 
+// Options of a run into `out`, emptied first, without the evaluation.
+RunOptions fresh_run_options(const fs::path& out) {
+  fs::remove_all(out);
+  RunOptions options;
+  options.output_dir = out.string();
+  options.evaluate = false;
+  return options;
+}
+
 TEST(SequenceRunner, TheFrameCallbackSeesEveryFrameAndCanStopTheRun) {
   const auto vocabulary = testing::default_vocabulary();
   if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
   const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 20));
   const MemoryDataset dataset(*source);
   const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_callback";
-  fs::remove_all(out);
-
   System system(testing::core_config(), dataset.camera(), vocabulary);
-  RunOptions options;
-  options.output_dir = out.string();
-  options.evaluate = false;
+  RunOptions options = fresh_run_options(out);
   std::vector<std::size_t> seen;
   std::size_t matched_keypoints = 0;
   options.on_frame = [&](const io::RgbdFrame& frame, const FrameOutcome& outcome) {
@@ -89,12 +94,8 @@ TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {
   const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 40));
   const MemoryDataset dataset(*source);
   const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_timings";
-  fs::remove_all(out);
-
   System system(testing::core_config(), dataset.camera(), vocabulary);
-  RunOptions options;
-  options.output_dir = out.string();
-  options.evaluate = false;
+  RunOptions options = fresh_run_options(out);
   const RunOutcome outcome = run_sequence(dataset, system, options);
   const nlohmann::json& timing = outcome.summary["timing_ms"];
   ASSERT_TRUE(timing.contains("local_mapping")) << timing.dump();
@@ -131,13 +132,9 @@ TEST(SequenceRunner, APacedRunFollowsTheStampsAndKeepsTheTrajectory) {
   const double span_s = dataset.timestamp(19) - dataset.timestamp(0);
   ASSERT_GT(span_s, 0.5);
   const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_paced";
-  fs::remove_all(out);
-
   auto run = [&](double rate, const std::string& name) {
     System system(testing::core_config(), dataset.camera(), vocabulary);
-    RunOptions options;
-    options.output_dir = (out / name).string();
-    options.evaluate = false;
+    RunOptions options = fresh_run_options(out / name);
     options.playback_rate = rate;
     return run_sequence(dataset, system, options).summary;
   };
@@ -165,12 +162,8 @@ TEST(SequenceRunner, AStoppedPacedRunDoesNotWaitForTheNextFrame) {
   const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 4));
   const MemoryDataset dataset(*source);
   const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_paced_stop";
-  fs::remove_all(out);
-
   System system(testing::core_config(), dataset.camera(), vocabulary);
-  RunOptions options;
-  options.output_dir = out.string();
-  options.evaluate = false;
+  RunOptions options = fresh_run_options(out);
   options.playback_rate = FramePacer::kMinRate;  // frame 1 is due about 33 s after frame 0
   options.on_frame = [](const io::RgbdFrame&, const FrameOutcome&) { return false; };
   const auto start = std::chrono::steady_clock::now();

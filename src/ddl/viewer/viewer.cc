@@ -11,7 +11,6 @@
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
-#include <system_error>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
