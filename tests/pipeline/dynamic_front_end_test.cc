@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "ddl/core/error.h"
 #include "ddl/synthetic/sequence.h"
+#include "shared_data.h"
 
 namespace ddl::pipeline {
 namespace {
@@ -93,6 +96,56 @@ TEST(DynamicFrontEndModel, AMissingModelFallsBackToGeometryOnly) {
   EXPECT_FALSE(front_end.has_segmenter());
   config.fallback_without_model = false;
   EXPECT_THROW(DynamicFrontEnd(config, synthetic::tum3_camera(), ""), InputError);
+}
+
+// Upright segmentation (dynamic.segmentation.upright): an upside-down frame is turned for the CNN
+// only when it is asked for, the frame's up is known and its roll reaches the threshold.
+TEST(DynamicFrontEndModel, AFrameIsTurnedUprightOnlyWhenAskedAndItsUpIsKnown) {
+  const std::string shared = test_support::shared_dir();
+  const std::string photo = test_support::kBasketballPhoto;
+  DynamicConfig config;
+  if (!fs::exists(fs::path(shared) / config.segmentation.model_path)) GTEST_SKIP() << "no model";
+  if (!fs::exists(photo)) GTEST_SKIP() << "opencv-doc not installed: " << photo;
+  config.segmentation_interval = 1;
+  config.fallback_without_model = false;
+  const cv::Mat upright = cv::imread(photo, cv::IMREAD_COLOR);
+  ASSERT_EQ(upright.size(), cv::Size(640, 480));
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  std::size_t index = 0;
+  const auto frame = [&](const cv::Mat& bgr, std::optional<Vec3d> up_c) {
+    io::RgbdFrame f;
+    f.index = index++;
+    f.rgb = bgr;
+    f.rgb_path = photo;  // no depth: the depth trim leaves the mask alone
+    f.up_c = up_c;
+    return f;
+  };
+  cv::Mat truth;
+  cv::flip(DynamicFrontEnd(config, camera, shared).cnn_mask(frame(upright, std::nullopt)).mask,
+           truth, -1);
+  ASSERT_GT(cv::countNonZero(truth), 0.05 * static_cast<double>(truth.total()));
+  const auto iou = [&](const cv::Mat& mask) {
+    return cv::countNonZero(mask & truth) / static_cast<double>(cv::countNonZero(mask | truth));
+  };
+  cv::Mat upside_down;
+  cv::flip(upright, upside_down, -1);
+  const Vec3d down(0, 1, 0);  // up points down the image
+
+  const CnnMask off = DynamicFrontEnd(config, camera, shared).cnn_mask(frame(upside_down, down));
+  EXPECT_FALSE(off.turned);
+  EXPECT_LT(iou(off.mask), 0.2);
+
+  config.segmentation.upright = true;
+  DynamicFrontEnd front_end(config, camera, shared);
+  const CnnMask unknown = front_end.cnn_mask(frame(upside_down, std::nullopt));
+  EXPECT_FALSE(unknown.turned);
+  const CnnMask turned = front_end.cnn_mask(frame(upside_down, down));
+  EXPECT_TRUE(turned.turned);
+  EXPECT_GT(iou(turned.mask), 0.9);
+  // Rolled by 5 degrees, under the 10-degree threshold: not turned.
+  const double roll = 5.0 * M_PI / 180.0;
+  EXPECT_FALSE(
+      front_end.cnn_mask(frame(upright, Vec3d(std::sin(roll), -std::cos(roll), 0))).turned);
 }
 
 }  // namespace

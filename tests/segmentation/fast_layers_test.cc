@@ -5,7 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
@@ -18,6 +17,7 @@
 #include "ddl/segmentation/block_permute_layer.h"
 #include "ddl/segmentation/corner_resize_layer.h"
 #include "ddl/segmentation/segmenter.h"
+#include "shared_data.h"
 
 namespace ddl::segmentation {
 namespace {
@@ -143,12 +143,8 @@ TEST(FastLayers, OtherTargetsGetOpenCVsLayersResult) {
       identical(ours_resized, run_layer(*cv::dnn::ResizeLayer::create(resize), resize_half, fp16)));
 }
 
-std::string shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
-  return DDL_DEFAULT_SHARED_DIR;
-}
-
-constexpr char kBasketball[] = "/usr/share/doc/opencv-doc/examples/data/basketball1.png";
+using test_support::shared_dir;
+constexpr const char* kBasketball = test_support::kBasketballPhoto;
 
 struct NetworkRun {
   cv::Mat scores;

@@ -2,24 +2,21 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "config_error_check.h"
 #include "ddl/core/error.h"
+#include "shared_data.h"
 
 namespace ddl::segmentation {
 namespace {
 namespace fs = std::filesystem;
 
-std::string shared_dir() {
-  const char* env = std::getenv("DDL_SHARED_DIR");
-  return env != nullptr && *env != '\0' ? env : DDL_DEFAULT_SHARED_DIR;
-}
-
-constexpr char kBasketball[] = "/usr/share/doc/opencv-doc/examples/data/basketball1.png";
+using test_support::shared_dir;
+constexpr const char* kBasketball = test_support::kBasketballPhoto;
 
 TEST(Segmenter, OnnxFindsThePeopleInBasketballPhoto) {
   SegmenterConfig config;
@@ -115,6 +112,18 @@ TEST(Segmenter, DilationIsBounded) {
   config.dilation_px = 100000;  // a 200001-pixel kernel
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
                                                         "dynamic.segmentation.dilation_px"));
+}
+
+TEST(Segmenter, UprightRollThresholdIsAnAngle) {
+  SegmenterConfig config;
+  for (const double bad : {-1.0, 181.0, std::nan("")}) {
+    config.upright_min_roll_deg = bad;
+    EXPECT_TRUE(test_support::throws_config_error_for_key(
+        [&] { config.validate(); }, "dynamic.segmentation.upright_min_roll_deg"))
+        << bad;
+  }
+  config.upright_min_roll_deg = 180.0;
+  EXPECT_NO_THROW(config.validate());
 }
 
 TEST(Segmenter, InvalidModelFileIsAClearError) {

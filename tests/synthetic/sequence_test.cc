@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -137,8 +139,8 @@ TempDir* WrittenSequence::dir_b_ = nullptr;
 TEST_F(WrittenSequence, SameSeedGivesTheSameBytes) {
   const auto files = list_files(dir_a_->path());
   ASSERT_EQ(files, list_files(dir_b_->path()));
-  // 5 image folders x 4 frames + 10 index/meta files.
-  EXPECT_EQ(files.size(), 5u * 4u + 10u);
+  // 5 image folders x 4 frames + 11 index/meta files (accelerometer.txt included).
+  EXPECT_EQ(files.size(), 5u * 4u + 11u);
   for (const auto& f : files) {
     EXPECT_EQ(read_bytes(dir_a_->path() / f), read_bytes(dir_b_->path() / f)) << f;
   }
@@ -170,6 +172,15 @@ TEST_F(WrittenSequence, TumReaderReadsIt) {
   const auto gt = io::read_tum_trajectory(*dataset.groundtruth_path());
   ASSERT_EQ(gt.size(), 4u);
   EXPECT_DOUBLE_EQ(gt[1].timestamp_s, dataset.timestamp(1));
+  // The accelerometer gives each frame the ground truth's up (world z) within a few degrees: the
+  // camera's own acceleration and the sensor noise are all that separate them.
+  ASSERT_TRUE(dataset.accelerometer().has_value());
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    const auto up_c = dataset.frame(i).up_c;
+    ASSERT_TRUE(up_c.has_value()) << i;
+    const Vec3d truth_up_c = gt[i].T_w_c().rotation().transpose() * Vec3d::UnitZ();
+    EXPECT_GT(up_c->dot(truth_up_c), std::cos(5.0 * M_PI / 180.0)) << i;
+  }
   // The three-line TUM headers and the extra lists.
   const std::string rgb_txt = read_bytes(dir_a_->path() / "rgb.txt");
   EXPECT_EQ(rgb_txt.rfind("# color images\n# file: '", 0), 0u);
@@ -275,6 +286,25 @@ TEST(Sequence, CompositeWritesAVoidMaskPerFrame) {
   write_sequence(*make_sequence_source(config), dir.str());
   const auto rows = io::read_text_table((dir.path() / "void_mask.txt").string());
   ASSERT_EQ(rows.size(), 3u);
+  // The real accelerometer's readings over those frames, unchanged.
+  const io::AccelerometerLog written =
+      io::AccelerometerLog::read((dir.path() / "accelerometer.txt").string());
+  const io::AccelerometerLog original =
+      io::AccelerometerLog::read(background + "/accelerometer.txt");
+  ASSERT_FALSE(written.empty());
+  EXPECT_LT(written.samples().size(), original.samples().size() / 20);
+  const double first = io::parse_double(rows.front().fields[0], "void_mask.txt", 1);
+  const double last = io::parse_double(rows.back().fields[0], "void_mask.txt", 3);
+  for (const io::AccelerometerSample& a : written.samples()) {
+    ASSERT_GE(a.timestamp_s, first - 0.051);
+    ASSERT_LE(a.timestamp_s, last + 0.051);
+    const auto same = std::find_if(original.samples().begin(), original.samples().end(),
+                                   [&](const io::AccelerometerSample& o) {
+                                     return std::abs(o.timestamp_s - a.timestamp_s) < 1e-6;
+                                   });
+    ASSERT_NE(same, original.samples().end());
+    EXPECT_LT((same->specific_force - a.specific_force).norm(), 1e-5);
+  }
   for (const auto& row : rows) {
     const cv::Mat mask = cv::imread((dir.path() / row.fields[1]).string(), cv::IMREAD_UNCHANGED);
     EXPECT_EQ(mask.type(), CV_8UC1) << row.fields[1];

@@ -4,7 +4,10 @@
 
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+
+#include "ddl/core/types.h"
 
 namespace ddl::io {
 
@@ -15,6 +18,9 @@ struct RgbdFrame {
   cv::Mat depth_m;         // CV_32FC1, metres along the optical axis, 0 = no measurement
   std::string rgb_path;    // source files, for messages and outputs
   std::string depth_path;
+  /// Up (unit vector) in the camera frame from the sequence's accelerometer at this frame's
+  /// stamp (io::AccelerometerLog); nullopt without one.
+  std::optional<Vec3d> up_c;
 };
 
 }  // namespace ddl::io

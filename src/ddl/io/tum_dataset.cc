@@ -218,11 +218,17 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
 
   const std::string groundtruth = (fs::path(dir_) / "groundtruth.txt").string();
   if (fs::is_regular_file(groundtruth, ec)) groundtruth_path_ = groundtruth;
+  const std::string accelerometer = (fs::path(dir_) / "accelerometer.txt").string();
+  if (fs::is_regular_file(accelerometer, ec)) {
+    accelerometer_ = AccelerometerLog::read(accelerometer);
+  }
 
-  spdlog::info("{}: {} RGB-D frames ({}), camera '{}'{}{}", name_, pairs_.size(),
-               association_description_, input_camera_.name,
-               input_camera_.has_distortion() ? " (undistorting)" : "",
-               groundtruth_path_ ? ", ground truth present" : ", no ground truth");
+  spdlog::info(
+      "{}: {} RGB-D frames ({}), camera '{}'{}{}{}", name_, pairs_.size(), association_description_,
+      input_camera_.name, input_camera_.has_distortion() ? " (undistorting)" : "",
+      groundtruth_path_ ? ", ground truth present" : ", no ground truth",
+      accelerometer_ ? fmt::format(", {} accelerometer readings", accelerometer_->samples().size())
+                     : "");
 }
 
 void TumDataset::read_association_file(const std::string& path) {
@@ -315,6 +321,7 @@ RgbdFrame TumDataset::frame(std::size_t i) const {
   cv::Mat depth_m;
   depth_raw.convertTo(depth_m, CV_32F, 1.0 / input_camera_.depth_factor);  // 0 stays 0
   frame.depth_m = undistorter_.undistort_depth(depth_m);
+  if (accelerometer_) frame.up_c = accelerometer_->up_in_camera_at(pair.rgb_timestamp_s);
   return frame;
 }
 

@@ -6,6 +6,8 @@
 //                                      <dir>; any image format OpenCV decodes (PNG, JPEG, ...)
 //   <dir>/associations.txt (optional)  `rgb_timestamp rgb_path depth_timestamp depth_path`
 //   <dir>/groundtruth.txt (optional)   `timestamp tx ty tz qx qy qz qw` (io::read_tum_trajectory)
+//   <dir>/accelerometer.txt (optional) `timestamp ax ay az` (io::AccelerometerLog): each frame
+//                                      gets the direction up in its camera frame (RgbdFrame::up_c)
 //
 // RGB/depth pairs come from an associations file or are computed from rgb.txt and depth.txt
 // exactly as TUM's associate.py does (io::associate, |t_rgb - t_depth| < max_difference_s).
@@ -25,6 +27,7 @@
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
+#include "ddl/io/accelerometer.h"
 #include "ddl/io/dataset_reader.h"
 #include "ddl/io/rgbd_frame.h"
 
@@ -82,6 +85,8 @@ class TumDataset : public DatasetReader {
     return undistorter_.undistort_depth(stored);  // nearest neighbour, no new values
   }
   std::optional<std::string> groundtruth_path() const override { return groundtruth_path_; }
+  /// The accelerometer log (<dir>/accelerometer.txt), when the sequence has one.
+  const std::optional<AccelerometerLog>& accelerometer() const { return accelerometer_; }
   std::string name() const override { return name_; }
 
   /// The calibration of the stored images (with distortion), as given to the constructor.
@@ -104,6 +109,7 @@ class TumDataset : public DatasetReader {
   camera::Undistorter undistorter_;
   std::vector<FramePair> pairs_;
   std::optional<std::string> groundtruth_path_;
+  std::optional<AccelerometerLog> accelerometer_;
   std::string association_description_;
 };
 

@@ -2,10 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
+
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
 #include "ddl/dynamics/mask_depth_trim.h"
 #include "ddl/dynamics/mask_fusion.h"
+#include "ddl/segmentation/upright.h"
 
 namespace ddl::pipeline {
 
@@ -47,6 +50,14 @@ std::string DynamicFrontEnd::segmenter_description() const {
   return segmenter_ ? segmenter_->description() : "none";
 }
 
+std::optional<double> DynamicFrontEnd::upright_turn(const io::RgbdFrame& frame) const {
+  const segmentation::SegmenterConfig& c = config_.segmentation;
+  if (!c.upright || c.backend != segmentation::Backend::kOnnx || !frame.up_c) return std::nullopt;
+  const std::optional<double> turn = segmentation::upright_turn_rad(*frame.up_c);
+  if (!turn || std::abs(*turn) < c.upright_min_roll_deg * M_PI / 180.0) return std::nullopt;
+  return turn;
+}
+
 CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
   CnnMask out;
   if (!segmenter_) return out;
@@ -72,7 +83,15 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
     if (out.mask.data == last_cnn_mask_.data) out.mask = last_cnn_mask_.clone();  // unchanged
     out.reused = true;
   } else {
-    cv::Mat mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+    cv::Mat mask;
+    const std::optional<double> turn = upright_turn(frame);
+    if (turn) {
+      mask =
+          segmentation::segment_turned(*segmenter_, frame.rgb, frame.rgb_path, *turn).dynamic_mask;
+      out.turned = true;
+    } else {
+      mask = segmenter_->segment(frame.rgb, frame.rgb_path).dynamic_mask;
+    }
     if (folder && stored_mask_mapping_) mask = stored_mask_mapping_(mask);
     out.mask = trimmed(mask);
     last_cnn_mask_ = out.mask.clone();

@@ -31,6 +31,7 @@ struct CnnMask {
   cv::Mat mask;             // CV_8UC1 255 = dynamic class (empty when segmentation is off)
   double elapsed_ms = 0.0;  // inference and post-processing
   bool reused = false;      // the last CNN mask grown (dynamic.segmentation_interval), no inference
+  bool turned = false;      // the frame was turned upright for the CNN (segmentation.upright)
 };
 
 struct DynamicMasks {
@@ -67,6 +68,8 @@ class DynamicFrontEnd {
   /// CNN mask of one frame (empty when segmentation is off); frames in index order. With
   /// dynamic.segmentation_interval > 1 most frames of the ONNX backend reuse the last inferred
   /// mask, grown (the schedule saves CNN time; the folder backend reads every frame's mask).
+  /// A frame whose up direction (RgbdFrame::up_c) shows a roll of at least
+  /// segmentation.upright_min_roll_deg is turned upright for the network (segmentation/upright.h).
   CnnMask cnn_mask(const io::RgbdFrame& frame);
 
   /// What the geometry check needs of the reference keyframes (best overlap first, at most
@@ -116,6 +119,9 @@ class DynamicFrontEnd {
                          const cv::Mat& dynamic_mask);
 
  private:
+  /// The turn that makes `frame` upright for the CNN, when one is configured and needed.
+  std::optional<double> upright_turn(const io::RgbdFrame& frame) const;
+
   DynamicConfig config_;
   camera::PinholeCamera camera_;
   std::unique_ptr<segmentation::Segmenter> segmenter_;

@@ -182,6 +182,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     if (!cnn) cnn = dynamic_->cnn_mask(frame);
     masks.cnn = std::move(cnn->mask);
     masks.segmentation_ms = cnn->elapsed_ms;
+    if (cnn->turned) ++stats_.segmentations_turned;
     if (dynamic_->has_segmenter()) {
       timings_.record(cnn->reused ? "segmentation.reused_mask" : "segmentation",
                       masks.segmentation_ms);

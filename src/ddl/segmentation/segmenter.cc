@@ -60,6 +60,9 @@ void SegmenterConfig::validate() const {
   if (dilation_px < 0 || dilation_px > 50) {
     throw ConfigError::for_key("dynamic.segmentation.dilation_px", "must be in 0..50");
   }
+  if (!(upright_min_roll_deg >= 0.0 && upright_min_roll_deg <= 180.0)) {
+    throw ConfigError::for_key("dynamic.segmentation.upright_min_roll_deg", "must be in 0..180");
+  }
 }
 
 cv::Mat mask_from_labels(const cv::Mat& labels, const std::set<int>& dynamic_labels) {

@@ -40,6 +40,9 @@ struct SegmenterConfig {
   int num_threads = 1;      // OpenCV threads; cv::setNumThreads is process-wide (docs/dynamics.md)
   std::string mask_folder;  // kFolder: one mask per RGB file (docs/dynamics.md, Backends)
   int dilation_px = 0;      // grow the mask by this many pixels after upsampling
+  bool upright = false;     // onnx: turn a rolled frame upright for the network, where the sequence
+                            // has an accelerometer (docs/dynamics.md, Upright segmentation)
+  double upright_min_roll_deg = 10.0;  // turn only frames rolled by at least this much (0..180)
 
   /// Throws ddl::ConfigError naming the key ("dynamic.segmentation.<field>", its place in the
   /// settings).

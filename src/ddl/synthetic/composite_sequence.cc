@@ -228,6 +228,19 @@ class CompositeSequence final : public SequenceSource {
 
   io::Trajectory groundtruth() const override { return groundtruth_; }
 
+  std::vector<io::AccelerometerSample> accelerometer() const override {
+    std::vector<io::AccelerometerSample> out;
+    if (!dataset_.accelerometer()) return out;
+    // The window io::AccelerometerLog averages over, around the first and last frame.
+    constexpr double kMargin = 0.05;
+    const double first = dataset_.pairs()[frames_.front()].rgb_timestamp_s - kMargin;
+    const double last = dataset_.pairs()[frames_.back()].rgb_timestamp_s + kMargin;
+    for (const io::AccelerometerSample& s : dataset_.accelerometer()->samples()) {
+      if (s.timestamp_s >= first && s.timestamp_s <= last) out.push_back(s);
+    }
+    return out;
+  }
+
   nlohmann::json description() const override {
     nlohmann::json people = nlohmann::json::array();
     for (std::size_t k = 0; k < tracks_.size(); ++k) {

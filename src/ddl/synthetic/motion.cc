@@ -130,4 +130,16 @@ SE3 camera_pose(const MotionConfig& c, double t) {
   return SE3();
 }
 
+Vec3d kinect_accelerometer_reading(const MotionConfig& config, double t_s, Rng& noise,
+                                   double noise_sigma) {
+  constexpr double kStep = 0.01;  // s
+  const Vec3d before = camera_pose(config, t_s - kStep).translation();
+  const SE3 now = camera_pose(config, t_s);
+  const Vec3d after = camera_pose(config, t_s + kStep).translation();
+  const Vec3d acceleration_w = (after - 2.0 * now.translation() + before) / (kStep * kStep);
+  const Vec3d force_c = now.rotation().transpose() * (acceleration_w + Vec3d(0, 0, 9.81));
+  const Vec3d reading(-force_c.x(), -force_c.y(), force_c.z());  // optical -> Kinect axes
+  return reading + noise_sigma * Vec3d(noise.normal(), noise.normal(), noise.normal());
+}
+
 }  // namespace ddl::synthetic

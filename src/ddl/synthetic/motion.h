@@ -20,6 +20,7 @@
 
 #include "ddl/core/se3.h"
 #include "ddl/core/types.h"
+#include "ddl/synthetic/random.h"
 
 namespace ddl::synthetic {
 
@@ -45,5 +46,12 @@ Mat3d look_at_rotation(const Vec3d& position_w, const Vec3d& target_w);
 
 /// T_w_c at time t_s (seconds from the sequence start).
 SE3 camera_pose(const MotionConfig& config, double t_s);
+
+/// What a Kinect's accelerometer on the camera of `config` reads at time t_s: the specific force
+/// (the camera's acceleration, by central differences over 10 ms, plus 9.81 m/s^2 up the world
+/// z axis) in the sensor's axes (x left, y up, z forward; io/accelerometer.h), with
+/// `noise_sigma` m/s^2 of Gaussian noise per axis drawn from `noise`.
+Vec3d kinect_accelerometer_reading(const MotionConfig& config, double t_s, Rng& noise,
+                                   double noise_sigma = 0.05);
 
 }  // namespace ddl::synthetic

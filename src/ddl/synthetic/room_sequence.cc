@@ -219,6 +219,17 @@ class RoomSequence final : public SequenceSource {
     return out;
   }
 
+  std::vector<io::AccelerometerSample> accelerometer() const override {
+    // Its own noise stream: the scene, people and object streams stay as they were.
+    Rng noise(hash2(config_.seed, 0xacce1e));
+    std::vector<io::AccelerometerSample> out;
+    for (std::size_t i = 0; i < frame_count(); ++i) {
+      out.push_back(
+          {rgb_stamp(config_, i), kinect_accelerometer_reading(motion_, time_s(i), noise)});
+    }
+    return out;
+  }
+
   nlohmann::json description() const override {
     std::set<std::string> sources;
     for (const auto& t : scene_.textures) sources.insert(t.source);

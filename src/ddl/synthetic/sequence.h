@@ -31,6 +31,7 @@
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
+#include "ddl/io/accelerometer.h"
 #include "ddl/io/trajectory_io.h"
 #include "ddl/synthetic/depth_model.h"
 #include "ddl/synthetic/motion.h"
@@ -156,6 +157,11 @@ class SequenceSource {
   /// The trajectory written to groundtruth.txt (synthetic: the pose of every frame at its RGB
   /// stamp; composite: the original sequence's ground truth, unchanged).
   virtual io::Trajectory groundtruth() const = 0;
+  /// The readings written to accelerometer.txt (io::AccelerometerLog: Kinect axes, x left, y up,
+  /// z forward, m/s^2). Synthetic: the specific force of the ground-truth motion (its
+  /// acceleration plus gravity) at each frame's RGB stamp, with seeded noise; composite: the
+  /// original sequence's readings over its frames, unchanged (none when it has no accelerometer).
+  virtual std::vector<io::AccelerometerSample> accelerometer() const = 0;
   /// Scene facts for meta.json: texture sources, people, object, placement.
   virtual nlohmann::json description() const = 0;
 };
@@ -174,6 +180,7 @@ struct WriteOptions {
 /// Writes the whole sequence into `out_dir` (created; existing files are overwritten):
 ///   rgb/ depth/ dynamic_mask/ background/rgb/ background/depth/  (PNG, named <stamp>.png)
 ///   rgb.txt depth.txt associations.txt groundtruth.txt dynamic_mask.txt
+///   accelerometer.txt  (when the source has readings)
 ///   void_mask/ void_mask.txt  (only when the source has void boxes)
 ///   background/rgb.txt background/depth.txt background/associations.txt
 ///   camera.yaml meta.json

@@ -51,6 +51,25 @@ std::string camera_yaml(const camera::PinholeCamera& c) {
       yaml_double(c.depth_factor), yaml_double(c.fps));
 }
 
+/// accelerometer.txt in the TUM format, the readings up to `last_stamp_s` (+ 0.05 s, the reading
+/// window of io::AccelerometerLog); nothing when the source has none.
+void write_accelerometer(const SequenceSource& source, const std::string& path,
+                         double last_stamp_s) {
+  std::string text;
+  for (const io::AccelerometerSample& s : source.accelerometer()) {
+    if (s.timestamp_s > last_stamp_s + 0.05) break;
+    const Vec3d& a = s.specific_force;
+    text += fmt::format("{:.6f} {:.6f} {:.6f} {:.6f}\n", s.timestamp_s, a.x(), a.y(), a.z());
+  }
+  if (text.empty()) {
+    std::error_code ec;
+    fs::remove(path, ec);  // a stale file of an earlier sequence written here
+    return;
+  }
+  write_text(path, "# accelerometer data (ddl_slam synth)\n# file: '" + source.config().name +
+                       "'\n# timestamp ax ay az\n" + text);
+}
+
 struct Lists {
   std::string rgb, depth, assoc, mask, void_mask, bg_rgb, bg_depth, bg_assoc;
   nlohmann::json frames = nlohmann::json::array();
@@ -87,6 +106,8 @@ void write_indices(const SequenceSource& source, const fs::path& out, const List
   if (source.config().background_dir.empty()) gt.resize(std::min(gt.size(), written));
   io::write_tum_trajectory((out / "groundtruth.txt").string(), gt,
                            "ground truth trajectory (T_w_c)\n# file: '" + name + "'");
+  write_accelerometer(source, (out / "accelerometer.txt").string(),
+                      gt.empty() ? 0.0 : gt.back().timestamp_s);
   write_text((out / "camera.yaml").string(), camera_yaml(source.camera()));
 
   nlohmann::json meta{{"generator", "ddl_slam synth"},
