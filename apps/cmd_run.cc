@@ -123,6 +123,10 @@ RunResult run_sequence_command(const RunArgs& args,
       io::parse_association_source(args.associations, "--associations");
   dataset_options.camera =
       config::resolve_dataset_camera(args.sequence, args.camera, dataset_options.kind);
+  // Only upright segmentation reads the accelerometer (docs/dynamics.md).
+  dataset_options.sequence.read_accelerometer = config.dynamic.enabled &&
+                                                config.dynamic.use_segmentation &&
+                                                config.dynamic.segmentation.upright;
   const std::unique_ptr<io::DatasetReader> dataset =
       io::open_dataset(args.sequence, dataset_options);
   spdlog::info("{}: {} frames, camera {}", dataset->name(), dataset->size(),

@@ -10,16 +10,12 @@
 
 #include "ddl/core/se3.h"
 #include "ddl/io/trajectory_io.h"
+#include "shared_data.h"
 
 namespace ddl::eval::test {
 
 /// $DDL_SHARED_DIR if set, else the build's default ../shared.
-inline std::filesystem::path shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') {
-    return env;
-  }
-  return DDL_DEFAULT_SHARED_DIR;
-}
+inline std::filesystem::path shared_dir() { return test_support::shared_dir(); }
 
 inline std::filesystem::path reference_groundtruth() {
   return shared_dir() / "data/tum/rgbd_dataset_freiburg1_rpy/groundtruth.txt";

@@ -6,12 +6,11 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "shared_data.h"
+
 namespace ddl::features::test {
 
-std::filesystem::path shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
-  return DDL_DEFAULT_SHARED_DIR;
-}
+std::filesystem::path shared_dir() { return test_support::shared_dir(); }
 
 std::filesystem::path tum_rpy_dir() {
   return shared_dir() / "data" / "tum" / "rgbd_dataset_freiburg1_rpy";

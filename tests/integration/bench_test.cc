@@ -20,16 +20,14 @@
 #include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/synthetic/sequence.h"
 #include "half_resolution.h"
+#include "shared_data.h"
 
 namespace ddl {
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
-  return DDL_DEFAULT_SHARED_DIR;
-}
+std::string shared_dir() { return test_support::shared_dir(); }
 
 /// A preset at 320x240 (intrinsics halved) with `frames` frames.
 synthetic::SequenceConfig small_config(const std::string& preset, int frames) {

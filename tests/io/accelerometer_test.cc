@@ -73,6 +73,11 @@ TEST(Accelerometer, MalformedFilesNameTheFileAndLine) {
   EXPECT_THAT(order, HasSubstr("before the previous one"));
   dir.write("text.txt", "1.0 0 nine 0\n");
   EXPECT_THAT(error_of(dir.file("text.txt")), HasSubstr("text.txt:1"));
+  // strtod reads "nan": a NaN timestamp would pass the order check and break the lookup.
+  dir.write("nan.txt", "1.0 0 9.8 0\nnan 0 9.8 0\n");
+  const std::string not_finite = error_of(dir.file("nan.txt"));
+  EXPECT_THAT(not_finite, HasSubstr("nan.txt:2"));
+  EXPECT_THAT(not_finite, HasSubstr("finite"));
   EXPECT_THAT(error_of(dir.file("missing.txt")), HasSubstr("missing.txt"));
 }
 

@@ -15,14 +15,12 @@
 #include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
+#include "shared_data.h"
 
 namespace ddl::test {
 
 /// $DDL_SHARED_DIR, else the build's default ../shared.
-inline std::string shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
-  return DDL_DEFAULT_SHARED_DIR;
-}
+inline std::string shared_dir() { return test_support::shared_dir(); }
 
 /// A unique empty folder under the system temp dir, removed on destruction.
 class TempDir {

@@ -63,6 +63,30 @@ TEST(TumDataset, ReadsCraftedSequenceWithDepthInMetres) {
   EXPECT_THAT(f.rgb_path, HasSubstr("rgb/" + stamps[3] + ".png"));
 }
 
+// accelerometer.txt is read only when asked for: a malformed one then names file and line, and
+// does not stop a run that does not use it.
+TEST(TumDataset, TheAccelerometerIsReadOnlyWhenAskedFor) {
+  TempDir dir("seq");
+  write_sequence(dir, 3);
+  dir.write("accelerometer.txt", "1000.000 0 9.81 0\n1000.033 0 9.81\n");
+  SequenceOptions with_accelerometer;
+  with_accelerometer.read_accelerometer = true;
+  const std::string error =
+      input_error_of([&] { TumDataset(dir.path(), tiny_camera(), with_accelerometer); });
+  EXPECT_THAT(error, HasSubstr("accelerometer.txt:2"));
+  const TumDataset plain(dir.path(), tiny_camera());
+  EXPECT_FALSE(plain.accelerometer().has_value());
+  EXPECT_FALSE(plain.frame(0).up_c.has_value());
+
+  dir.write("accelerometer.txt", "1000.000 0 9.81 0\n1000.033 9.81 0 0\n");
+  const TumDataset read(dir.path(), tiny_camera(), with_accelerometer);
+  ASSERT_TRUE(read.frame(0).up_c.has_value());
+  EXPECT_NEAR((*read.frame(0).up_c - Vec3d(0, -1, 0)).norm(), 0.0, 1e-9);
+  ASSERT_TRUE(read.frame(1).up_c.has_value());
+  EXPECT_NEAR((*read.frame(1).up_c - Vec3d(-1, 0, 0)).norm(), 0.0, 1e-9);
+  EXPECT_FALSE(read.frame(2).up_c.has_value());  // no reading within 20 ms of 1000.067
+}
+
 TEST(TumDataset, ZeroDepthStaysZeroAndGrayscaleRgbBecomesBgr) {
   TempDir dir("seq");
   write_sequence(dir, 2);
@@ -322,11 +346,15 @@ camera::PinholeCamera tum1_camera() {
 
 // The accelerometer's up against the ground truth's (world z up, the motion-capture frame) at the
 // frames' stamps. Hand-held motion adds its own acceleration: measured median 4.8 degrees, 90th
-// percentile 9.3, largest 20.3 over 723 frames.
+// percentile 9.4, largest 20.3 over the 691 frames with a ground-truth pose within 20 ms.
 TEST(TumDatasetFr1Rpy, TheAccelerometerGivesUpWithinAFewDegreesOfGroundTruth) {
   SKIP_WITHOUT_FR1_RPY();
-  const TumDataset dataset(fr1_rpy_dir(), tum1_camera());
+  SequenceOptions options;
+  options.read_accelerometer = true;
+  const TumDataset dataset(fr1_rpy_dir(), tum1_camera(), options);
   ASSERT_TRUE(dataset.accelerometer().has_value());
+  // Not asked for, it is not read.
+  EXPECT_FALSE(TumDataset(fr1_rpy_dir(), tum1_camera()).accelerometer().has_value());
   const Trajectory truth = read_tum_trajectory(*dataset.groundtruth_path());
   std::vector<double> angles_deg;
   for (const FramePair& pair : dataset.pairs()) {

@@ -173,13 +173,17 @@ TEST_F(WrittenSequence, TumReaderReadsIt) {
   ASSERT_EQ(gt.size(), 4u);
   EXPECT_DOUBLE_EQ(gt[1].timestamp_s, dataset.timestamp(1));
   // The accelerometer gives each frame the ground truth's up (world z) within a few degrees: the
-  // camera's own acceleration and the sensor noise are all that separate them.
-  ASSERT_TRUE(dataset.accelerometer().has_value());
-  for (std::size_t i = 0; i < dataset.size(); ++i) {
-    const auto up_c = dataset.frame(i).up_c;
+  // camera's own acceleration and the sensor noise are all that separate them (measured: 4.4
+  // degrees at most in these four frames, 8.4 over the whole of syn_walking_xyz).
+  io::SequenceOptions with_accelerometer;
+  with_accelerometer.read_accelerometer = true;
+  const io::TumDataset accelerometer_dataset(dir_a_->str(), cam, with_accelerometer);
+  ASSERT_TRUE(accelerometer_dataset.accelerometer().has_value());
+  for (std::size_t i = 0; i < accelerometer_dataset.size(); ++i) {
+    const auto up_c = accelerometer_dataset.frame(i).up_c;
     ASSERT_TRUE(up_c.has_value()) << i;
     const Vec3d truth_up_c = gt[i].T_w_c().rotation().transpose() * Vec3d::UnitZ();
-    EXPECT_GT(up_c->dot(truth_up_c), std::cos(5.0 * M_PI / 180.0)) << i;
+    EXPECT_GT(up_c->dot(truth_up_c), std::cos(10.0 * M_PI / 180.0)) << i;
   }
   // The three-line TUM headers and the extra lists.
   const std::string rgb_txt = read_bytes(dir_a_->path() / "rgb.txt");

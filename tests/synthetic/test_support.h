@@ -9,13 +9,11 @@
 
 #include "ddl/synthetic/sequence.h"
 #include "half_resolution.h"
+#include "shared_data.h"
 
 namespace ddl::synthetic::testing {
 
-inline std::string shared_dir() {
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
-  return DDL_DEFAULT_SHARED_DIR;
-}
+inline std::string shared_dir() { return test_support::shared_dir(); }
 
 /// A preset at 320x240 (intrinsics halved), with the shared people photos when present.
 inline SequenceConfig small_config(const std::string& preset, int frames) {

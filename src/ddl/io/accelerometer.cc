@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "ddl/core/error.h"
@@ -10,10 +11,10 @@
 
 namespace ddl::io {
 
-std::optional<Vec3d> up_in_camera_from_accelerometer(const Vec3d& specific_force, double min_g,
-                                                     double max_g) {
+std::optional<Vec3d> up_in_camera_from_accelerometer(const Vec3d& specific_force,
+                                                     double min_norm_mps2, double max_norm_mps2) {
   const double g = specific_force.norm();
-  if (!(g >= min_g && g <= max_g)) return std::nullopt;
+  if (!(g >= min_norm_mps2 && g <= max_norm_mps2)) return std::nullopt;
   // Kinect accelerometer axes (x left, y up, z forward) -> optical frame (x right, y down).
   return Vec3d(-specific_force.x(), -specific_force.y(), specific_force.z()) / g;
 }
@@ -31,6 +32,9 @@ AccelerometerLog AccelerometerLog::read(const std::string& path) {
     for (int k = 0; k < 3; ++k) {
       s.specific_force[k] =
           parse_double(row.fields[static_cast<std::size_t>(k) + 1], path, row.line);
+    }
+    if (!std::isfinite(s.timestamp_s) || !s.specific_force.allFinite()) {
+      throw InputError::at_line(path, row.line, "a value is not a finite number");
     }
     if (!samples.empty() && s.timestamp_s < samples.back().timestamp_s) {
       throw InputError::at_line(path, row.line,
@@ -52,7 +56,6 @@ std::optional<Vec3d> AccelerometerLog::up_in_camera_at(double stamp_s, double ha
   Vec3d sum = Vec3d::Zero();
   int n = 0;
   for (auto it = first; it != samples_.end() && it->timestamp_s <= stamp_s + half_window_s; ++it) {
-    if (!it->specific_force.allFinite()) continue;
     sum += it->specific_force;
     ++n;
   }

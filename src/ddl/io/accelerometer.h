@@ -25,23 +25,28 @@ struct AccelerometerSample {
 };
 
 /// Up in the camera's optical frame from one reading in the Kinect accelerometer's axes; nullopt
-/// when its magnitude is outside [min_g, max_g] m/s^2 (a missing sensor writes zeros, a hard
-/// knock far more than g).
+/// when its norm is outside [min_norm_mps2, max_norm_mps2] (a missing sensor writes zeros, a hard
+/// knock reads far more than g).
 std::optional<Vec3d> up_in_camera_from_accelerometer(const Vec3d& specific_force,
-                                                     double min_g = 5.0, double max_g = 15.0);
+                                                     double min_norm_mps2 = 5.0,
+                                                     double max_norm_mps2 = 15.0);
 
 class AccelerometerLog {
  public:
   /// Reads `path`. Throws ddl::InputError naming the file and line (wrong field count, a
-  /// non-numeric value, a timestamp that decreases).
+  /// non-numeric or non-finite value, a timestamp that decreases).
   static AccelerometerLog read(const std::string& path);
 
   explicit AccelerometerLog(std::vector<AccelerometerSample> samples);
 
+  /// Readings within this many seconds of a frame's stamp make its up direction.
+  static constexpr double kDefaultHalfWindowS = 0.02;
+
   /// Up in the camera frame at `stamp_s`: the mean of the readings within `half_window_s` of it,
   /// converted by up_in_camera_from_accelerometer. nullopt when no reading lies that close or
   /// their mean is not a plausible gravity reading.
-  std::optional<Vec3d> up_in_camera_at(double stamp_s, double half_window_s = 0.02) const;
+  std::optional<Vec3d> up_in_camera_at(double stamp_s,
+                                       double half_window_s = kDefaultHalfWindowS) const;
 
   const std::vector<AccelerometerSample>& samples() const { return samples_; }
   bool empty() const { return samples_.empty(); }

@@ -6,8 +6,9 @@
 //                                      <dir>; any image format OpenCV decodes (PNG, JPEG, ...)
 //   <dir>/associations.txt (optional)  `rgb_timestamp rgb_path depth_timestamp depth_path`
 //   <dir>/groundtruth.txt (optional)   `timestamp tx ty tz qx qy qz qw` (io::read_tum_trajectory)
-//   <dir>/accelerometer.txt (optional) `timestamp ax ay az` (io::AccelerometerLog): each frame
-//                                      gets the direction up in its camera frame (RgbdFrame::up_c)
+//   <dir>/accelerometer.txt (optional) `timestamp ax ay az` (io::AccelerometerLog): with
+//                                      SequenceOptions::read_accelerometer each frame gets the
+//                                      direction up in its camera frame (RgbdFrame::up_c)
 //
 // RGB/depth pairs come from an associations file or are computed from rgb.txt and depth.txt
 // exactly as TUM's associate.py does (io::associate, |t_rgb - t_depth| < max_difference_s).
@@ -56,6 +57,10 @@ struct SequenceOptions {
                                     // with kAuto also selects this file.
   double max_difference_s = 0.02;   // associate.py --max_difference, seconds (computed pairs)
   bool check_files_on_open = true;  // fail at construction when a listed image file is missing
+  /// Load <dir>/accelerometer.txt, when present, into each frame's up direction (RgbdFrame::up_c;
+  /// a malformed file is then an error). Off, the file is not read: a run that does not use it
+  /// does not depend on it.
+  bool read_accelerometer = false;
 
   /// Throws ddl::ConfigError naming the key ("dataset.max_difference") when out of range.
   void validate() const;
@@ -85,7 +90,8 @@ class TumDataset : public DatasetReader {
     return undistorter_.undistort_depth(stored);  // nearest neighbour, no new values
   }
   std::optional<std::string> groundtruth_path() const override { return groundtruth_path_; }
-  /// The accelerometer log (<dir>/accelerometer.txt), when the sequence has one.
+  /// The accelerometer log (<dir>/accelerometer.txt), when the sequence has one and
+  /// SequenceOptions::read_accelerometer asked for it.
   const std::optional<AccelerometerLog>& accelerometer() const { return accelerometer_; }
   std::string name() const override { return name_; }
 

@@ -35,6 +35,13 @@ DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::Pinh
                                  const std::string& shared_dir)
     : config_(config), camera_(camera), memory_(config.memory, camera) {
   if (!config_.enabled || !config_.use_segmentation) return;
+  if (config_.segmentation.upright &&
+      config_.segmentation.backend != segmentation::Backend::kOnnx) {
+    spdlog::warn(
+        "dynamic.segmentation.upright applies to the onnx backend only: the {} backend's masks "
+        "are used as they are",
+        config_.segmentation.backend == segmentation::Backend::kFolder ? "folder" : "none");
+  }
   try {
     segmenter_ = segmentation::make_segmenter(config_.segmentation, shared_dir);
   } catch (const segmentation::ModelNotFoundError& e) {

@@ -25,8 +25,10 @@ std::optional<double> upright_turn_rad(const Vec3d& up_c, double min_tilt_rad = 
 cv::Mat turn_about_centre(cv::Size size, double turn_rad);
 
 /// `segmenter` on `bgr` turned by `turn_rad` (upright_turn_rad); its labels and mask turned back.
-/// The turned image's corners are filled by mirroring it; pixels of `bgr` that the turned image
-/// does not hold (its corners) are background in the result.
+/// Called from the segmenter's thread (Segmenter::segment's rule: one thread at a time).
+/// The turned image keeps the frame's size. Its corners are filled by mirroring it; pixels of
+/// `bgr` that it does not hold (the frame's corners; at a quarter turn of a 640x480 frame, the
+/// 80 px strips at both sides) are background in the result.
 SegmentationResult segment_turned(Segmenter& segmenter, const cv::Mat& bgr,
                                   const std::string& source_path, double turn_rad);
 

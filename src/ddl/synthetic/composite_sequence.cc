@@ -65,11 +65,18 @@ cv::Mat void_mask_of(const cv::Mat& depth_m, const Renderer& renderer, const SE3
   return mask;
 }
 
+/// The background sequence's own readings are copied into the composite (accelerometer()).
+io::SequenceOptions with_accelerometer() {
+  io::SequenceOptions options;
+  options.read_accelerometer = true;
+  return options;
+}
+
 class CompositeSequence final : public SequenceSource {
  public:
   explicit CompositeSequence(const SequenceConfig& config)
       : config_(config),
-        dataset_(config.background_dir, config.background_camera),
+        dataset_(config.background_dir, config.background_camera, with_accelerometer()),
         renderer_(config.background_camera) {
     const auto gt_path = dataset_.groundtruth_path();
     if (!gt_path) {
@@ -231,10 +238,8 @@ class CompositeSequence final : public SequenceSource {
   std::vector<io::AccelerometerSample> accelerometer() const override {
     std::vector<io::AccelerometerSample> out;
     if (!dataset_.accelerometer()) return out;
-    // The window io::AccelerometerLog averages over, around the first and last frame.
-    constexpr double kMargin = 0.05;
-    const double first = dataset_.pairs()[frames_.front()].rgb_timestamp_s - kMargin;
-    const double last = dataset_.pairs()[frames_.back()].rgb_timestamp_s + kMargin;
+    const double first = dataset_.pairs()[frames_.front()].rgb_timestamp_s - kAccelerometerMarginS;
+    const double last = dataset_.pairs()[frames_.back()].rgb_timestamp_s + kAccelerometerMarginS;
     for (const io::AccelerometerSample& s : dataset_.accelerometer()->samples()) {
       if (s.timestamp_s >= first && s.timestamp_s <= last) out.push_back(s);
     }

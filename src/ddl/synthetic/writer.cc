@@ -51,13 +51,14 @@ std::string camera_yaml(const camera::PinholeCamera& c) {
       yaml_double(c.depth_factor), yaml_double(c.fps));
 }
 
-/// accelerometer.txt in the TUM format, the readings up to `last_stamp_s` (+ 0.05 s, the reading
-/// window of io::AccelerometerLog); nothing when the source has none.
+/// accelerometer.txt in the TUM format, the readings up to `last_stamp_s` plus a margin wider than
+/// the window io::AccelerometerLog averages over; nothing (and no stale file) when the source has
+/// none.
 void write_accelerometer(const SequenceSource& source, const std::string& path,
                          double last_stamp_s) {
   std::string text;
   for (const io::AccelerometerSample& s : source.accelerometer()) {
-    if (s.timestamp_s > last_stamp_s + 0.05) break;
+    if (s.timestamp_s > last_stamp_s + kAccelerometerMarginS) break;
     const Vec3d& a = s.specific_force;
     text += fmt::format("{:.6f} {:.6f} {:.6f} {:.6f}\n", s.timestamp_s, a.x(), a.y(), a.z());
   }
