@@ -37,8 +37,12 @@ struct PointProjection {
 bool project_in_frustum(const Frame& frame, const map::MapPointPtr& point, float min_view_cos,
                         PointProjection& out);
 
+/// The searches are virtual so that a test can watch what a caller asks of them (relocalization's
+/// exclusion sets); the tracker uses this class as it is.
 class FrameMatcher {
  public:
+  virtual ~FrameMatcher() = default;
+
   /// ORB-SLAM2 SearchByProjection(Frame, LastFrame): each inlier point of `last` (pose known) is
   /// projected into `current` (pose = prediction); the search window is radius_px scaled by the
   /// keypoint's level, restricted to finer / coarser levels when the camera moved forward /
@@ -58,15 +62,16 @@ class FrameMatcher {
   /// the same level) are compared; best within TH_LOW and below ratio * second best, then
   /// rotation consistency. `matches` gets frame.size() slots, the keyframe's point in each
   /// matched one. Both must have BoW computed. Returns the number of matches.
-  int match_bow(const map::KeyFrame& keyframe, const Frame& frame, float ratio,
-                std::vector<map::MapPointPtr>& matches);
+  virtual int match_bow(const map::KeyFrame& keyframe, const Frame& frame, float ratio,
+                        std::vector<map::MapPointPtr>& matches);
 
   /// ORB-SLAM2 SearchByProjection(Frame, KeyFrame, sAlreadyFound, th, ORBdist): projects the
   /// keyframe's points not in `already_found` (map point ids marked in that IdMarks round) into
   /// empty slots of `frame`; window radius_px * level scale over levels [l - 1, l + 1], best
   /// within max_distance, rotation consistency. Returns the number of matches.
-  int match_keyframe_projection(Frame& frame, const map::KeyFrame& keyframe,
-                                const IdMarks& already_found, float radius_px, int max_distance);
+  virtual int match_keyframe_projection(Frame& frame, const map::KeyFrame& keyframe,
+                                        const IdMarks& already_found, float radius_px,
+                                        int max_distance);
 
  private:
   /// Applies the rotation-consistency check to the matches recorded in histogram_ (ids = frame

@@ -14,14 +14,17 @@
 
 namespace ddl::tracking {
 
+/// optimize() is virtual so that a test can steer a caller's control flow (relocalization); the
+/// tracker uses this class as it is.
 class FramePoseEstimator {
  public:
   FramePoseEstimator(const FrameGeometry& geometry, const optimization::OptimizerConfig& config);
+  virtual ~FramePoseEstimator() = default;
 
   /// Optimises frame.T_c_w() (the initial guess) against the frame's matched points and sets
   /// the outlier flags of all matches. Returns the number of inliers (0 and nothing changed
   /// with fewer than 3 matches).
-  int optimize(Frame& frame);
+  virtual int optimize(Frame& frame);
 
  private:
   optimization::CameraIntrinsics intrinsics_;
