@@ -10,12 +10,12 @@
 #include "ddl/tracking/frame_matching.h"
 #include "ddl/tracking/local_map.h"
 #include "ddl/tracking/pose_estimation.h"
-#include "ddl/tracking/relocalizer.h"
 #include "tracking_test_support.h"
 
 namespace ddl::tracking {
 namespace {
 
+using testing::first_room_frame_at_truth;
 using testing::room_sequence;
 using testing::test_camera;
 
@@ -171,15 +171,6 @@ TEST(FrameTest, UnprojectsKeypointsIntoTheWorld) {
   EXPECT_TRUE((frame.camera_center_w() - seq.T_w_c[5].translation()).norm() < 1e-12);
 }
 
-// The room's first frame at its ground-truth pose.
-Frame first_room_frame_at_truth() {
-  const TrackerConfig config = testing::test_tracker_config();
-  FrameBuilder builder(test_camera(), config.orb, config.frame);
-  Frame frame = builder.build(room_sequence().frames[0], cv::Mat(), 0);
-  frame.set_T_c_w(room_sequence().T_w_c[0].inverse());
-  return frame;
-}
-
 // The local keyframe set of a frame whose points more keyframes observe than the set's bound.
 TEST(LocalMapTest, KeyframesObservingTheFramesPointsAllStayBeyondTheBound) {
   const TrackerConfig config = testing::test_tracker_config();
@@ -210,62 +201,6 @@ TEST(LocalMapTest, KeyframesObservingTheFramesPointsAllStayBeyondTheBound) {
   EXPECT_EQ(local.keyframes().size(), 120u);  // K1 is never cut (ORB-SLAM2)
   EXPECT_NE(std::find(local.keyframes().begin(), local.keyframes().end(), reference),
             local.keyframes().end());
-}
-
-// Relocalization's first projection search must not match again the points that the pose
-// optimisation rejected (ORB-SLAM2 keeps every PnP inlier in sFound). A keyframe of the same
-// image offers each of its points at the keypoint it came from, so a rejected point left unmarked
-// is matched straight back into the frame.
-TEST(RelocalizerTest, TheFirstProjectionSearchSkipsThePointsTheOptimisationRejected) {
-  Frame frame = first_room_frame_at_truth();
-  ASSERT_GT(frame.size(), 300u);
-  auto keyframe = std::make_shared<map::KeyFrame>(
-      0, 0.0, std::make_shared<map::FrameFeatures>(frame.features()), frame.T_c_w());
-  std::vector<map::MapPointPtr> points(frame.size());
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    if (!frame.has_depth(i)) continue;
-    auto point = std::make_shared<map::MapPoint>(i, frame.unproject_w(i), keyframe);
-    point->add_observation(keyframe, i, true);
-    keyframe->set_map_point(i, point);
-    point->compute_distinctive_descriptor();
-    point->update_normal_and_depth();
-    points[i] = point;
-  }
-  // The "PnP inliers": every third point; the optimisation then rejects every ninth.
-  int held = 0;
-  int rejected = 0;
-  for (std::size_t i = 0; i < frame.size(); i += 3) {
-    if (!points[i]) continue;
-    frame.set_map_point(i, points[i]);
-    const bool outlier = i % 9 == 0;
-    frame.set_outlier(i, outlier);
-    (outlier ? rejected : held) += 1;
-  }
-  ASSERT_GT(rejected, 30);
-  discard_outliers(frame);
-  ASSERT_EQ(frame.matched_count(), held);
-  ASSERT_EQ(static_cast<int>(frame.rejected_points().size()), rejected);
-
-  FrameMatcher matcher;
-  IdMarks marks;
-  Frame with_rejected = frame;
-  mark_already_found(with_rejected, /*with_rejected=*/true, marks);
-  const int found = matcher.match_keyframe_projection(with_rejected, *keyframe, marks, 10.0f, 100);
-  Frame without_rejected = frame;
-  mark_already_found(without_rejected, /*with_rejected=*/false, marks);
-  const int found_again =
-      matcher.match_keyframe_projection(without_rejected, *keyframe, marks, 10.0f, 100);
-
-  // The points never matched are found (about two thirds of them); the rejected ones only when
-  // they are not marked.
-  EXPECT_GT(found, 200);
-  for (std::size_t i = 0; i < with_rejected.size(); ++i) {
-    const map::MapPointPtr& p = with_rejected.map_point(i);
-    if (!p) continue;
-    ASSERT_TRUE(p->id() % 9 != 0 || p->id() % 3 != 0) << "rejected point " << p->id();
-  }
-  EXPECT_GE(found_again, found + rejected * 8 / 10)
-      << "found " << found << ", rejected " << rejected;
 }
 
 }  // namespace

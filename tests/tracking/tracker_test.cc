@@ -7,11 +7,9 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
-#include <set>
 #include <vector>
 
 #include "ddl/core/error.h"
-#include "ddl/tracking/relocalizer.h"
 #include "tracking_test_support.h"
 
 namespace ddl::tracking {
@@ -20,35 +18,8 @@ namespace {
 using testing::associate_keyframe;
 using testing::pose_error;
 using testing::room_sequence;
-
-struct SequenceRun {
-  std::vector<TrackingResult> results;
-  io::Trajectory trajectory;
-  std::shared_ptr<map::Map> map;
-  std::shared_ptr<vocabulary::BowDatabase> database;
-  std::size_t keyframes_created = 0;
-};
-
-/// Tracks frames [0, count) of the room sequence. With `associate`, each new keyframe goes
-/// through the minimal local-mapping stand-in (observations, covisibility, BoW database).
-SequenceRun track_sequence(std::size_t count, bool associate, const TrackerConfig& config) {
-  SequenceRun run;
-  run.map = std::make_shared<map::Map>();
-  auto database = std::make_shared<vocabulary::BowDatabase>();
-  run.database = database;
-  Tracker tracker(config, testing::test_camera(), run.map, testing::room_vocabulary(), database);
-  const MappingStatus idle;
-  for (std::size_t k = 0; k < count; ++k) {
-    TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
-    if (r.new_keyframe) {
-      ++run.keyframes_created;
-      if (associate) associate_keyframe(r.new_keyframe, *database);
-    }
-    run.results.push_back(std::move(r));
-  }
-  run.trajectory = tracker.camera_trajectory();
-  return run;
-}
+using testing::SequenceRun;
+using testing::track_sequence;
 
 /// Ground truth of frame k expressed in the first camera's frame (the map's world frame).
 SE3 truth_in_map(std::size_t k) {
@@ -296,96 +267,6 @@ TEST(TrackerTest, RelocalizesAfterBlankFrames) {
   EXPECT_LT(pose_error(*next.T_w_c, seq.T_w_c[0].inverse() * T_w_c_next).translation_m, 0.01);
   // Lost frames are left out of the trajectory.
   EXPECT_EQ(tracker.camera_trajectory().size(), tracked + 2);
-}
-
-// What relocalization asks of its projection searches (ORB-SLAM2 Tracking::Relocalization): the
-// first, wide search leaves out every PnP inlier, those the optimisation rejected included
-// (sFound); the second, narrow one leaves out the frame's current matches. A matcher that records
-// the exclusion set of each search, and an estimator that rejects every fourth match and reports
-// inlier counts that lead through both searches, watch the real Relocalizer.
-class RecordingMatcher final : public FrameMatcher {
- public:
-  struct Search {
-    std::set<map::MapPointId> excluded;  // the keyframe's points marked as already found
-    std::set<map::MapPointId> held;      // the frame's matches when the search starts
-    std::set<map::MapPointId> rejected;  // the frame's rejected points then
-  };
-  int match_keyframe_projection(Frame& frame, const map::KeyFrame& keyframe,
-                                const IdMarks& already_found, float radius_px,
-                                int max_distance) override {
-    Search s;
-    for (const map::MapPointPtr& p : keyframe.map_points()) {
-      if (p && already_found.is_marked(p->id())) s.excluded.insert(p->id());
-    }
-    for (const map::MapPointPtr& p : frame.map_points()) {
-      if (p) s.held.insert(p->id());
-    }
-    s.rejected.insert(frame.rejected_points().begin(), frame.rejected_points().end());
-    searches.push_back(s);
-    return FrameMatcher::match_keyframe_projection(frame, keyframe, already_found, radius_px,
-                                                   max_distance);
-  }
-  std::vector<Search> searches;
-};
-
-class SteeringEstimator final : public FramePoseEstimator {
- public:
-  SteeringEstimator(const FrameGeometry& geometry, const optimization::OptimizerConfig& config,
-                    std::vector<int> reported)
-      : FramePoseEstimator(geometry, config), reported_(std::move(reported)) {}
-  int optimize(Frame& frame) override {
-    FramePoseEstimator::optimize(frame);
-    for (std::size_t i = 0; i < frame.size(); i += 4) {
-      if (frame.map_points()[i]) frame.set_outlier(i, true);
-    }
-    const int call = calls_++;
-    return call < static_cast<int>(reported_.size()) ? reported_[static_cast<std::size_t>(call)]
-                                                     : reported_.back();
-  }
-
- private:
-  std::vector<int> reported_;
-  int calls_ = 0;
-};
-
-TEST(RelocalizerTest, EachProjectionSearchLeavesOutWhatORBSLAM2LeavesOut) {
-  const TrackerConfig config = testing::test_tracker_config();
-  const SequenceRun run = track_sequence(30, /*associate=*/true, config);
-  ASSERT_GE(run.map->keyframe_count(), 2u);
-  Relocalizer relocalizer(config.relocalization, config.frame.bow_levels_up, run.map,
-                          testing::room_vocabulary(), run.database);
-
-  FrameBuilder builder(testing::test_camera(), config.orb, config.frame);
-  Frame frame = builder.build(room_sequence().frames[12], cv::Mat(), 100);
-  RecordingMatcher matcher;
-  // After PnP: just enough to go on (pnp_min_inliers), too few to succeed: the wide search. After
-  // it: between retry_inliers and min_inliers: the narrow search. Then success.
-  const RelocalizationConfig& rc = config.relocalization;
-  SteeringEstimator estimator(*builder.geometry(), config.optimizer,
-                              {rc.pnp_min_inliers, rc.retry_inliers + 1, rc.min_inliers});
-  const RelocalizationResult result = relocalizer.relocalize(frame, matcher, estimator);
-  ASSERT_TRUE(result.success);
-  ASSERT_EQ(matcher.searches.size(), 2u);
-
-  const RecordingMatcher::Search& wide = matcher.searches[0];
-  ASSERT_FALSE(wide.rejected.empty());
-  std::set<map::MapPointId> pnp_inliers = wide.held;
-  pnp_inliers.insert(wide.rejected.begin(), wide.rejected.end());
-  for (map::MapPointId id : pnp_inliers) {
-    if (wide.excluded.count(id) == 0) ADD_FAILURE() << "PnP inlier " << id << " not excluded";
-  }
-  for (map::MapPointId id : wide.excluded) EXPECT_EQ(pnp_inliers.count(id), 1u) << id;
-
-  const RecordingMatcher::Search& narrow = matcher.searches[1];
-  // The points rejected after the first optimisation are not in the frame any more; the narrow
-  // search may find them again.
-  for (map::MapPointId id : narrow.excluded) EXPECT_EQ(narrow.held.count(id), 1u) << id;
-  int held_in_keyframe = 0;
-  for (map::MapPointId id : narrow.held) held_in_keyframe += narrow.excluded.count(id) > 0;
-  EXPECT_GT(held_in_keyframe, 0);
-  int rejected_excluded = 0;
-  for (map::MapPointId id : wide.rejected) rejected_excluded += narrow.excluded.count(id) > 0;
-  EXPECT_EQ(rejected_excluded, 0);
 }
 
 TEST(TrackerTest, ResetsWhenLostWithATinyMap) {

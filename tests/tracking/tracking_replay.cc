@@ -20,7 +20,6 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
-#include <time.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -48,14 +47,6 @@
 namespace {
 
 using namespace ddl;
-
-/// CPU time of the calling thread [ms]: on a machine shared with other jobs it shows what a
-/// frame costs without the waiting that wall-clock time includes.
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 std::shared_ptr<const vocabulary::Vocabulary> load_or_train(const std::string& path,
                                                             const io::TumDataset& dataset,

@@ -88,4 +88,32 @@ PoseError pose_error(const SE3& estimate, const SE3& truth) {
           delta.rotation_angle() * 180.0 / M_PI};
 }
 
+// The room's first frame at its ground-truth pose.
+Frame first_room_frame_at_truth() {
+  const TrackerConfig config = test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  Frame frame = builder.build(room_sequence().frames[0], cv::Mat(), 0);
+  frame.set_T_c_w(room_sequence().T_w_c[0].inverse());
+  return frame;
+}
+
+SequenceRun track_sequence(std::size_t count, bool associate, const TrackerConfig& config) {
+  SequenceRun run;
+  run.map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  run.database = database;
+  Tracker tracker(config, test_camera(), run.map, room_vocabulary(), database);
+  const MappingStatus idle;
+  for (std::size_t k = 0; k < count; ++k) {
+    TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
+    if (r.new_keyframe) {
+      ++run.keyframes_created;
+      if (associate) associate_keyframe(r.new_keyframe, *database);
+    }
+    run.results.push_back(std::move(r));
+  }
+  run.trajectory = tracker.camera_trajectory();
+  return run;
+}
+
 }  // namespace ddl::tracking::testing

@@ -8,8 +8,11 @@
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
 #include "ddl/io/rgbd_frame.h"
+#include "ddl/io/trajectory_io.h"
 #include "ddl/map/keyframe.h"
 #include "ddl/map/map.h"
+#include "ddl/tracking/frame.h"
+#include "ddl/tracking/tracker.h"
 #include "ddl/tracking/tracker_config.h"
 #include "ddl/vocabulary/bow_database.h"
 #include "ddl/vocabulary/vocabulary.h"
@@ -41,6 +44,21 @@ TrackerConfig test_tracker_config();
 /// descriptor and normal are refreshed, the covisibility links are updated, and the keyframe goes
 /// into the BoW database.
 void associate_keyframe(const map::KeyFramePtr& keyframe, vocabulary::BowDatabase& database);
+
+/// The room's first frame, features extracted, at its ground-truth pose.
+Frame first_room_frame_at_truth();
+
+struct SequenceRun {
+  std::vector<TrackingResult> results;
+  io::Trajectory trajectory;
+  std::shared_ptr<map::Map> map;
+  std::shared_ptr<vocabulary::BowDatabase> database;  // filled only with `associate`
+  std::size_t keyframes_created = 0;
+};
+
+/// Tracks frames [0, count) of the room sequence. With `associate`, each new keyframe goes
+/// through the minimal local-mapping stand-in (observations, covisibility, BoW database).
+SequenceRun track_sequence(std::size_t count, bool associate, const TrackerConfig& config);
 
 struct PoseError {
   double translation_m = 0.0;
