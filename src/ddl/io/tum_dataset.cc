@@ -218,8 +218,8 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
 
   const std::string groundtruth = (fs::path(dir_) / "groundtruth.txt").string();
   if (fs::is_regular_file(groundtruth, ec)) groundtruth_path_ = groundtruth;
-  const std::string accelerometer = (fs::path(dir_) / "accelerometer.txt").string();
   if (options.read_accelerometer) {
+    const std::string accelerometer = (fs::path(dir_) / "accelerometer.txt").string();
     if (fs::is_regular_file(accelerometer, ec)) {
       accelerometer_ = AccelerometerLog::read(accelerometer);
     } else {
