@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <vector>
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
@@ -30,6 +31,52 @@ class PauseScope {
 
 }  // namespace
 
+/// The keyframes process() protects from culling while it works with them (ORB-SLAM2's
+/// SetNotErase / SetErase). Whatever is still protected when the scope ends, also on an exception,
+/// is released: culling deferred meanwhile happens then.
+class LoopCloser::Protection {
+ public:
+  explicit Protection(LoopCloser& closer) : closer_(closer) {}
+  ~Protection() {
+    for (const map::KeyFramePtr& keyframe : keyframes_) {
+      try {
+        closer_.release(keyframe);
+      } catch (...) {
+        keyframe->set_not_erase(false);
+      }
+    }
+  }
+  Protection(const Protection&) = delete;
+  Protection& operator=(const Protection&) = delete;
+
+  void protect(const map::KeyFramePtr& keyframe) {
+    keyframe->set_not_erase(true);
+    keyframes_.push_back(keyframe);
+  }
+  /// Releases every protected keyframe except `keep`, which stays protected.
+  void release_all_but(const map::KeyFramePtr& keep) {
+    std::vector<map::KeyFramePtr> kept;
+    for (const map::KeyFramePtr& keyframe : keyframes_) {
+      if (keyframe == keep) {
+        kept.push_back(keyframe);
+      } else {
+        closer_.release(keyframe);
+      }
+    }
+    keyframes_ = std::move(kept);
+  }
+  /// The loop edges protect the loop's two keyframes from now on: the scope's own protection is
+  /// lifted without releasing them.
+  void hand_over_to_loop_edges() {
+    for (const map::KeyFramePtr& keyframe : keyframes_) keyframe->set_not_erase(false);
+    keyframes_.clear();
+  }
+
+ private:
+  LoopCloser& closer_;
+  std::vector<map::KeyFramePtr> keyframes_;
+};
+
 LoopCloser::LoopCloser(const LoopCloserConfig& config, const camera::PinholeCamera& camera,
                        std::shared_ptr<map::Map> map,
                        std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
@@ -55,8 +102,15 @@ LoopCloser::~LoopCloser() {
 void LoopCloser::set_mapping_pause(MappingPause hooks) { pause_ = std::move(hooks); }
 
 void LoopCloser::request_reset(map::KeyFrameId first_valid_keyframe) {
-  std::lock_guard lock(reset_mutex_);
-  pending_reset_ = first_valid_keyframe;
+  {
+    std::lock_guard lock(reset_mutex_);
+    pending_reset_ = first_valid_keyframe;
+  }
+  // A global BA of the cleared map has nothing left to refine (nor to merge into).
+  global_ba_abort_.store(true);
+}
+
+void LoopCloser::on_loop_verified(const map::KeyFramePtr& /*keyframe*/, const LoopMatch& /*loop*/) {
 }
 
 void LoopCloser::apply_pending_reset() {
@@ -104,8 +158,13 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   if (keyframe->id() < first_valid_keyframe_) return result;
   result.keyframe = keyframe->id();
 
+  // A background global BA may merge while the candidates are verified below; verification
+  // then reads poses and points from both sides of the merge. The index tells (checked once the
+  // global BA is aborted and joined, when nothing else can move the map).
+  const int big_change_before = map_->big_change_index();
   Stopwatch watch;
-  keyframe->set_not_erase(true);
+  Protection protection(*this);
+  protection.protect(keyframe);
   const LoopDetector::Detection detection = detector_.detect(keyframe);
   const bool try_pending =
       config_.detection.covisible_confirmations > 0 && !detection.pending.empty();
@@ -115,11 +174,10 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   }
   result.candidates = candidates.size();
   if (candidates.empty()) {
-    release(keyframe);
     result.detection_ms = watch.elapsed_ms();
     return result;
   }
-  for (const map::KeyFramePtr& kf : candidates) kf->set_not_erase(true);
+  for (const map::KeyFramePtr& kf : candidates) protection.protect(kf);
   std::optional<LoopMatch> loop;
   if (!detection.consistent.empty()) {
     loop = verify_loop_candidates(keyframe, detection.consistent, camera_, config_.verification,
@@ -131,17 +189,24 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
                                   config_.optimizer);
     if (loop && !confirmed_by_covisibles(keyframe, *loop)) loop.reset();
   }
-  for (const map::KeyFramePtr& kf : candidates) {
-    if (!loop || kf != loop->matched) release(kf);
-  }
   result.detection_ms = watch.elapsed_ms();
-  if (!loop) {
-    release(keyframe);
-    return result;
-  }
+  if (!loop) return result;  // the protection scope releases every keyframe
+  // The keyframe and the loop keyframe stay protected; the other candidates are free again.
+  protection.release_all_but(loop->matched);
+  on_loop_verified(keyframe, *loop);
 
   // A global BA of an earlier loop is outdated now (ORB-SLAM2 aborts it too).
   abort_global_ba();
+  if (map_->big_change_index() != big_change_before) {
+    // It merged during the verification: T_cur_w_corrected is in the world frame from before.
+    // The detector keeps its consistent groups, so a later keyframe finds the loop again.
+    loops_deferred_.fetch_add(1);
+    result.deferred_after_merge = true;
+    spdlog::info(
+        "loop at keyframe {} with {} left for later: a global BA merged while it was verified",
+        keyframe->id(), loop->matched->id());
+    return result;
+  }
   watch.reset();
   {
     PauseScope paused(pause_);
@@ -149,9 +214,7 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
         correct_loop(keyframe, *loop, *map_, camera_, config_.correction, config_.optimizer);
   }
   result.correction_ms = watch.elapsed_ms();
-  // The loop edges protect both keyframes from now on; release our own protection.
-  keyframe->set_not_erase(false);
-  loop->matched->set_not_erase(false);
+  protection.hand_over_to_loop_edges();
   detector_.set_last_loop_keyframe(keyframe->id());
   result.loop_closed = true;
   result.matched_keyframe = loop->matched->id();

@@ -49,9 +49,13 @@ struct LoopResult {
   int loop_matches = 0;                  ///< verified matches with the loop points
   SE3 T_cur_matched;                     ///< relative pose estimated (when loop_closed)
   LoopCorrectionStatistics correction;   ///< when loop_closed
-  bool global_ba_started = false;        ///< in the background thread
-  bool global_ba_ran = false;            ///< inline, completed and merged
-  double detection_ms = 0.0;             ///< detection and verification
+  /// A loop was verified, but a background global BA merged into the map while it was being
+  /// verified: its poses and points were read from both sides of the merge, so the loop is left
+  /// for a later keyframe to detect again (loop_closed stays false).
+  bool deferred_after_merge = false;
+  bool global_ba_started = false;  ///< in the background thread
+  bool global_ba_ran = false;      ///< inline, completed and merged
+  double detection_ms = 0.0;       ///< detection and verification
   double correction_ms = 0.0;
   double global_ba_ms = 0.0;  ///< inline global BA (0 in background mode)
 };
@@ -76,7 +80,7 @@ class LoopCloser {
              std::shared_ptr<const vocabulary::Vocabulary> vocabulary,
              std::shared_ptr<vocabulary::BowDatabase> keyframe_database);
   /// Aborts and joins a running global BA.
-  ~LoopCloser();
+  virtual ~LoopCloser();
   LoopCloser(const LoopCloser&) = delete;
   LoopCloser& operator=(const LoopCloser&) = delete;
 
@@ -85,7 +89,8 @@ class LoopCloser {
   /// The tracker cleared the map (TrackingResult::map_reset): before the next keyframe the
   /// detector forgets its consistent groups, and keyframes with ids below `first_valid_keyframe`
   /// (made for the old map, possibly still queued) are ignored by process() (ORB-SLAM2
-  /// LoopClosing::RequestReset).
+  /// LoopClosing::RequestReset). A background global BA of the old map is told to abort (it
+  /// stops at its next iteration and merges nothing); this call does not wait for it.
   void request_reset(map::KeyFrameId first_valid_keyframe);
 
   /// Detects and, when verified, corrects a loop at `keyframe` (processed by local mapping
@@ -103,14 +108,23 @@ class LoopCloser {
   std::size_t loops_closed() const { return loops_closed_.load(); }
   /// Global BAs completed and merged (inline or background).
   std::size_t global_ba_runs() const { return global_ba_runs_.load(); }
-  /// Global BAs aborted by a newer loop or stop().
+  /// Global BAs aborted by a newer loop, a map reset or stop().
   std::size_t global_ba_aborted() const { return global_ba_aborted_.load(); }
+  /// Verified loops left for later because a global BA merged during their verification.
+  std::size_t loops_deferred() const { return loops_deferred_.load(); }
+
+ protected:
+  /// Called by process() once a loop is verified at `keyframe`, before a running global BA is
+  /// aborted and the loop corrected. No-op; a seam for tests and instrumentation (tests use it
+  /// to merge a global BA at exactly this point).
+  virtual void on_loop_verified(const map::KeyFramePtr& keyframe, const LoopMatch& loop);
 
  private:
   void apply_pending_reset();
   /// True when the loop verified at `keyframe` holds in its covisible_confirmations best
   /// covisibles too (each with >= min_confirmation_inliers inliers).
   bool confirmed_by_covisibles(const map::KeyFramePtr& keyframe, const LoopMatch& loop) const;
+  class Protection;
   void release(const map::KeyFramePtr& keyframe);
   void abort_global_ba();
   void join_global_ba();
@@ -131,6 +145,7 @@ class LoopCloser {
   std::atomic<std::size_t> loops_closed_{0};
   std::atomic<std::size_t> global_ba_runs_{0};
   std::atomic<std::size_t> global_ba_aborted_{0};
+  std::atomic<std::size_t> loops_deferred_{0};
 
   std::mutex thread_mutex_;  // guards global_ba_thread_ (start / join)
   std::thread global_ba_thread_;

@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <vector>
+
 #include "ddl/mapping/keyframe_matching.h"
 
 namespace ddl::loop {
@@ -39,7 +41,9 @@ LoopCorrectionStatistics correct_loop(const map::KeyFramePtr& current, const Loo
   fuse_params.conflict = mapping::FuseConflict::kPreferProjected;
 
   map.apply_update([&] {
-    // 1. Points first (they use the poses before the correction), then the poses.
+    // 1. Points first (they use the poses before the correction), then the poses; the points'
+    // normals and depth ranges last, from the corrected camera centres.
+    std::vector<map::MapPointPtr> moved;
     for (const auto& [id, kf] : connected) {
       const SE3 T_w_corrected = graph.corrected_T_c_w.at(id).inverse();
       const SE3& T_c_w_before = graph.non_corrected_T_c_w.at(id);
@@ -47,13 +51,14 @@ LoopCorrectionStatistics correct_loop(const map::KeyFramePtr& current, const Loo
         if (graph.corrected_points.count(point->id()) != 0) continue;
         point->set_position_w(T_w_corrected * (T_c_w_before * point->position_w()));
         graph.corrected_points[point->id()] = id;
-        point->update_normal_and_depth();
+        moved.push_back(point);
       }
     }
     for (const auto& [id, kf] : connected) {
       kf->set_T_c_w(graph.corrected_T_c_w.at(id));
       kf->update_connections();
     }
+    for (const map::MapPointPtr& point : moved) point->update_normal_and_depth();
     stats.corrected_keyframes = connected.size();
     stats.corrected_points = graph.corrected_points.size();
 
