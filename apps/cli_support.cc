@@ -19,8 +19,17 @@ namespace {
 std::atomic<bool> g_stop_requested{false};
 
 extern "C" void on_signal(int) {
-  if (g_stop_requested.exchange(true)) std::_Exit(kInterrupted);
-  constexpr char kMsg[] = "\nstopping: finishing the current frame and saving outputs...\n";
+  if (g_stop_requested.exchange(true)) {
+    // Only async-signal-safe calls here: write(2) and _Exit.
+    constexpr char kQuit[] =
+        "\nsecond interrupt: exiting at once; the outputs of this run are NOT saved (files in the "
+        "output folder may be from an earlier run)\n";
+    [[maybe_unused]] auto n = write(STDERR_FILENO, kQuit, sizeof(kQuit) - 1);
+    std::_Exit(kInterrupted);
+  }
+  constexpr char kMsg[] =
+      "\nstopping: finishing the current frame and saving outputs (interrupt again to quit at "
+      "once without saving)...\n";
   [[maybe_unused]] auto n = write(STDERR_FILENO, kMsg, sizeof(kMsg) - 1);
 }
 
@@ -74,6 +83,7 @@ Progress::~Progress() {
 }
 
 void Progress::update(std::size_t done, const std::string& note) {
+  done_ = done;
   const double t = now_s();
   const double interval = tty_ ? 0.1 : 5.0;
   if (t - last_print_s_ < interval && done < total_) return;
@@ -99,6 +109,14 @@ void Progress::finish(const std::string& note) {
   if (finished_) return;
   last_print_s_ = -1e9;
   update(total_, note);
+  if (tty_) std::fputc('\n', stderr);
+  finished_ = true;
+}
+
+void Progress::finish_early(const std::string& note) {
+  if (finished_) return;
+  last_print_s_ = -1e9;
+  update(done_, note);
   if (tty_) std::fputc('\n', stderr);
   finished_ = true;
 }

@@ -31,12 +31,16 @@ class Progress {
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
   void update(std::size_t done, const std::string& note = {});
+  /// The last line, at the total.
   void finish(const std::string& note = {});
+  /// The last line when the work stopped early (Ctrl-C): at the last count update() was given.
+  void finish_early(const std::string& note);
 
  private:
   std::string label_;
   std::size_t total_;
   bool tty_;
+  std::size_t done_ = 0;  // the last count update() was given
   bool finished_ = false;
   double start_s_;
   double last_print_s_ = -1e9;

@@ -232,8 +232,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                   "Camera for every sequence (tum1, tum2, tum3, bonn, synthetic or a YAML file); "
                   "default: per folder, as `ddl_slam run`");
   cmd->add_option("--max-frames", args->run.max_frames,
-                  "Process at most this many frames of each sequence (0 = all)");
-  cmd->add_option("--first-frame", args->run.first_frame, "Skip the frames before this index");
+                  "Process at most this many frames of each sequence (0 = all)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--first-frame", args->run.first_frame, "Skip the frames before this index")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--vocabulary", args->run.vocabulary_path,
                   "ORB vocabulary file; default $DDL_VOCABULARY or the one shipped in vocab/");
   cmd->add_option("--segmentation", args->run.segmentation,

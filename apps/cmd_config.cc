@@ -23,8 +23,10 @@ void add_config_command(CLI::App& app, int& exit_code) {
       "Print the default settings as YAML (a starting point for run --config), check a settings "
       "file (--check FILE: unknown keys and invalid values are errors naming file, line and key), "
       "or print the Markdown reference of every setting (--reference).");
-  cmd->add_option("--check", args->check, "Settings file to validate; prints its effective values");
-  cmd->add_flag("--reference", args->reference, "Print the Markdown table of every key");
+  CLI::Option* check = cmd->add_option("--check", args->check,
+                                       "Settings file to validate; prints its effective values");
+  cmd->add_flag("--reference", args->reference, "Print the Markdown table of every key")
+      ->excludes(check);
   cmd->callback([args, &exit_code] {
     exit_code = run_guarded([&] {
       if (args->reference) {

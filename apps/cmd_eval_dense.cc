@@ -108,7 +108,9 @@ void add_eval_dense_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--sequence", args->inputs.sequence_dir,
                   "Synthetic sequence folder (written by `ddl_slam synth`)")
       ->required();
-  cmd->add_option("--run", args->inputs.run_dir, "Output folder of `ddl_slam run`")->required();
+  cmd->add_option("--run", args->inputs.run_dir, "Output folder of `ddl_slam run`")
+      ->required()
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--camera", args->camera,
                   "Camera of the sequence (as `run --camera`); default <sequence>/camera.yaml");
   cmd->add_option("--map", args->map_path, "Octree file to evaluate; default <run>/map.ot");
@@ -129,9 +131,11 @@ void add_eval_dense_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--previous-keyframes", args->options.previous_keyframes,
                   "A dynamic pixel is 'seen' when one of this many earlier keyframes saw its "
                   "background point")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--frame-stride", args->options.frame_stride,
                   "Reference geometry from every n-th frame of the run (and every keyframe)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--pixel-stride", args->options.pixel_stride,
                   "Reference geometry from every n-th pixel in u and v")

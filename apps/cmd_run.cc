@@ -178,7 +178,11 @@ RunResult run_sequence_command(const RunArgs& args,
   const pipeline::RunOutcome outcome = pipeline::run_sequence(
       *dataset, system, run_options, stop,
       [&](std::size_t done, std::size_t, const std::string& note) { progress.update(done, note); });
-  progress.finish();
+  if (outcome.interrupted) {
+    progress.finish_early("interrupted");
+  } else {
+    progress.finish();
+  }
   if (view) {
     view->finish();
     spdlog::info("viewer: {} views drawn{}{}", view->frames_drawn(),
@@ -263,8 +267,10 @@ void add_run_command(CLI::App& app, int& exit_code) {
                   "Segmentation backend: onnx (default model in the shared folder), folder, none");
   cmd->add_option("--shared-dir", args->shared_dir,
                   "Shared data folder (models); default $DDL_SHARED_DIR or ../shared");
-  cmd->add_option("--first-frame", args->first_frame, "Skip the frames before this index");
-  cmd->add_option("--max-frames", args->max_frames, "Process at most this many frames (0 = all)");
+  cmd->add_option("--first-frame", args->first_frame, "Skip the frames before this index")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-frames", args->max_frames, "Process at most this many frames (0 = all)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--playback-rate", args->playback_rate,
                   "Feed the frames at RATE times the pace of their timestamps, as a live camera "
                   "delivers them (1 = real time; none is dropped without --drop-late-frames; "

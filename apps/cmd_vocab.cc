@@ -389,6 +389,7 @@ void add_vocab_command(CLI::App& app, int& exit_code) {
                   "File names (without folder) to leave out, e.g. basketball1.png");
   cmd->add_option("--max-images", train->max_images,
                   "Use at most this many images, evenly spaced over the sorted list (0 = all)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--features", train->features, "ORB features per image")->capture_default_str();
   cmd->add_option("--out", train->out, "Vocabulary file to write (.dvoc)")->required();
@@ -426,6 +427,7 @@ void add_vocab_command(CLI::App& app, int& exit_code) {
   eval_cmd
       ->add_option("--max-images", eval->max_images,
                    "Use at most this many images, evenly spaced (0 = all)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   eval_cmd->add_option("--features", eval->features, "ORB features per image")
       ->capture_default_str();

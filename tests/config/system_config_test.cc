@@ -83,6 +83,41 @@ TEST(SystemConfig, InvalidValueNamesTheKey) {
   EXPECT_NE(type_msg.find("keyframe_queue_capacity"), std::string::npos) << type_msg;
 }
 
+// Review finding (stop 20): a value out of range named the key but not its line, although
+// unknown keys and type errors did; a second YAML document in the file was silently ignored.
+TEST(SystemConfig, ValueOutOfRangeNamesFileLineAndKey) {
+  const std::string msg = message_of([] {
+    parse_system_config("mode: deterministic\ntracking:\n  orb:\n    scale_factor: .nan\n",
+                        "nan.yaml");
+  });
+  EXPECT_EQ(msg.rfind("nan.yaml:4: ", 0), 0u) << msg;
+  EXPECT_NE(msg.find("tracking.orb.scale_factor"), std::string::npos) << msg;
+  // A check across keys names one the file does not hold: file, no line.
+  const std::string cross =
+      message_of([] { parse_system_config("tracking:\n  frame:\n    bf: 50\n", "bf.yaml"); });
+  EXPECT_EQ(cross.rfind("bf.yaml: ", 0), 0u) << cross;
+  // Segmentation threads go to cv::setNumThreads, which crashed on 2e9 (TBB).
+  const std::string threads = message_of([] {
+    parse_system_config("dynamic:\n  segmentation:\n    num_threads: 2000000000\n", "t.yaml");
+  });
+  EXPECT_EQ(threads.rfind("t.yaml:3: ", 0), 0u) << threads;
+  EXPECT_NE(threads.find("dynamic.segmentation.num_threads"), std::string::npos) << threads;
+  // 2 * dilation_px + 1 overflowed an int in the geometry check.
+  const std::string dilation = message_of(
+      [] { parse_system_config("dynamic:\n  geometry:\n    dilation_px: 100000\n", "d.yaml"); });
+  EXPECT_NE(dilation.find("dynamic.geometry.dilation_px"), std::string::npos) << dilation;
+}
+
+TEST(SystemConfig, MoreThanOneYamlDocumentIsAnError) {
+  const std::string msg = message_of(
+      [] { parse_system_config("mode: deterministic\n---\nmode: threaded\n", "two.yaml"); });
+  EXPECT_NE(msg.find("two.yaml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("2 YAML documents"), std::string::npos) << msg;
+  // One document with a leading marker, and an empty file, are fine.
+  EXPECT_NO_THROW(parse_system_config("---\nmode: threaded\n", "one.yaml"));
+  EXPECT_NO_THROW(parse_system_config("", "empty.yaml"));
+}
+
 // The virtual baseline of the RGB-D residuals is one number in three sections: a file that sets
 // only one of them is rejected (mapping and loop closing predicted the stored u_r with another bf,
 // off by delta_bf / z pixels, found by review on 2026-11-26).

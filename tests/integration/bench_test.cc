@@ -346,6 +346,92 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
+// Review findings (stop 20): CLI11 wrapped negative counts into huge unsigned ones (-3 frames
+// ran the whole sequence; with --first-frame the sum overflowed and nothing ran, exit 0).
+TEST_F(Bench, NegativeFrameCountsAreBadInput) {
+  for (const std::string option : {"--max-frames -3", "--first-frame -1"}) {
+    std::string log;
+    const std::string command = std::string("'") + DDL_SLAM_BINARY +
+                                "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
+                                (*root_ / "walk").string() + "' " + option + " --out '" +
+                                (*root_ / "negative").string() + "'";
+    EXPECT_EQ(run_shell(command, *root_ / "negative.log", &log), 2) << option << ": " << log;
+    EXPECT_NE(log.find(option.substr(0, option.find(' '))), std::string::npos) << log;
+  }
+}
+
+// Review finding (stop 20): a malformed groundtruth.txt only skipped the evaluation with a
+// warning, exit 0, as a run too short to evaluate does. It is bad input: exit 2, the file and line
+// named, the run's outputs written.
+TEST_F(Bench, AMalformedGroundTruthIsBadInputAfterTheOutputsAreWritten) {
+  const fs::path sequence = *root_ / "walk_bad_truth";
+  fs::remove_all(sequence);
+  fs::copy(*root_ / "walk", sequence, fs::copy_options::recursive);
+  std::ifstream good(*root_ / "walk" / "groundtruth.txt");
+  std::ofstream bad(sequence / "groundtruth.txt");
+  int line_no = 0;
+  int broken_line = 0;
+  for (std::string line; std::getline(good, line);) {
+    ++line_no;
+    if (broken_line == 0 && !line.empty() && line[0] != '#' && line_no > 10) {
+      line = line.substr(0, line.rfind(' '));  // 7 fields
+      broken_line = line_no;
+    }
+    bad << line << '\n';
+  }
+  bad.close();
+  ASSERT_GT(broken_line, 0);
+  const fs::path out = *root_ / "bad_truth_run";
+  const std::string command = std::string("'") + DDL_SLAM_BINARY +
+                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
+                              sequence.string() + "' --no-dynamic --no-octomap --no-inpainting " +
+                              "--max-frames 20 --out '" + out.string() + "'";
+  std::string log;
+  EXPECT_EQ(run_shell(command, *root_ / "bad_truth.log", &log), 2) << log;
+  EXPECT_NE(log.find("groundtruth.txt:" + std::to_string(broken_line)), std::string::npos) << log;
+  const json summary = read_json(out / "summary.json");
+  EXPECT_TRUE(summary["failed"].get<bool>());
+  EXPECT_NE(summary["evaluation_error"].get<std::string>().find("groundtruth.txt"),
+            std::string::npos);
+  int poses = 0;
+  std::ifstream trajectory(out / "CameraTrajectory.txt");
+  for (std::string line; std::getline(trajectory, line);) poses += !line.empty() && line[0] != '#';
+  EXPECT_EQ(poses, 20);
+}
+
+// Review finding (stop 20): synth wrote into any folder, so a TUM sequence given as --out lost its
+// lists to the generated ones. It writes only into a new or empty folder, or over a sequence it
+// generated before, whose files it replaces whole.
+TEST_F(Bench, SynthRefusesAFolderItDidNotWrite) {
+  const fs::path folder = *root_ / "not_a_synth_sequence";
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  { std::ofstream(folder / "groundtruth.txt") << "# someone's ground truth\n"; }
+  const std::string synth = std::string("'") + DDL_SLAM_BINARY +
+                            "' --log-level warn synth --shared-dir '" + shared_dir() +
+                            "' --preset syn_static_xyz --frames ";
+  std::string log;
+  EXPECT_EQ(run_shell(synth + "3 --out '" + folder.string() + "'", *root_ / "synth1.log", &log), 2)
+      << log;
+  EXPECT_NE(log.find(folder.string()), std::string::npos) << log;
+  EXPECT_EQ(read_text(folder / "groundtruth.txt"), "# someone's ground truth\n");
+  EXPECT_FALSE(fs::exists(folder / "rgb.txt"));
+
+  // Over its own earlier sequence: the longer sequence's extra frames are gone.
+  const fs::path again = *root_ / "synth_again";
+  fs::remove_all(again);
+  ASSERT_EQ(run_shell(synth + "4 --out '" + again.string() + "'", *root_ / "synth2.log", &log), 0)
+      << log;
+  ASSERT_EQ(run_shell(synth + "2 --out '" + again.string() + "'", *root_ / "synth3.log", &log), 0)
+      << log;
+  const auto count = [](const fs::path& dir) {
+    return std::distance(fs::directory_iterator(dir), fs::directory_iterator{});
+  };
+  EXPECT_EQ(count(again / "rgb"), 2);
+  EXPECT_EQ(count(again / "depth"), 2);
+  EXPECT_EQ(count(again / "background" / "rgb"), 2);
+}
+
 // The viewer only reads: a deterministic run writes the same trajectory with and without it, and
 // its images are the frames asked for, both panels side by side.
 TEST_F(Bench, TheViewerDrawsTheFramesAskedForAndChangesNoTrajectory) {

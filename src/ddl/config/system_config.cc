@@ -237,19 +237,26 @@ class Documenter {
 
 }  // namespace
 
-pipeline::SystemConfig parse_system_config(const std::string& yaml,
-                                           const std::string& source_name) {
-  YamlFile file = YamlFile::parse(yaml, source_name);
-  pipeline::SystemConfig config;
-  Reader reader(file.root());
-  visit(reader, config);
-  file.check_all_keys_used();
-  config.validate();
-  return config;
+namespace {
+
+/// A validation error of the settings in `file`, with the file and, when the message names a
+/// key the file holds, its line ("run.yaml:7: configuration key 'tracking.orb.scale_factor':
+/// ..."). A key left at its default has no line.
+ConfigError located(const YamlFile& file, const ConfigError& error) {
+  const std::string message = error.what();
+  const std::string marker = "configuration key '";
+  int line = 0;
+  if (const auto pos = message.find(marker); pos != std::string::npos) {
+    const std::size_t begin = pos + marker.size();
+    if (const auto end = message.find('\'', begin); end != std::string::npos) {
+      line = file.line_of_path(message.substr(begin, end - begin));
+    }
+  }
+  return ConfigError(line > 0 ? fmt::format("{}:{}: {}", file.source(), line, message)
+                              : fmt::format("{}: {}", file.source(), message));
 }
 
-pipeline::SystemConfig load_system_config(const std::string& path) {
-  YamlFile file = YamlFile::load(path);
+pipeline::SystemConfig read_system_config(const YamlFile& file) {
   pipeline::SystemConfig config;
   Reader reader(file.root());
   visit(reader, config);
@@ -257,9 +264,20 @@ pipeline::SystemConfig load_system_config(const std::string& path) {
   try {
     config.validate();
   } catch (const ConfigError& e) {
-    throw ConfigError(fmt::format("{}: {}", path, e.what()));
+    throw located(file, e);
   }
   return config;
+}
+
+}  // namespace
+
+pipeline::SystemConfig parse_system_config(const std::string& yaml,
+                                           const std::string& source_name) {
+  return read_system_config(YamlFile::parse(yaml, source_name));
+}
+
+pipeline::SystemConfig load_system_config(const std::string& path) {
+  return read_system_config(YamlFile::load(path));
 }
 
 std::string system_config_to_yaml(const pipeline::SystemConfig& config) {

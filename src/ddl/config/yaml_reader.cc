@@ -372,7 +372,13 @@ YamlFile YamlFile::parse(const std::string& text, const std::string& source_name
   auto context = std::make_shared<detail::YamlContext>();
   context->source = source_name;
   try {
-    context->root = YAML::Load(text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+    if (documents.size() > 1) {
+      throw ConfigError(
+          fmt::format("{}: holds {} YAML documents (separated by '---'); settings take exactly one",
+                      source_name, documents.size()));
+    }
+    if (!documents.empty()) context->root.reset(documents.front());
   } catch (const YAML::ParserException& e) {
     throw ConfigError(fmt::format(
         "{}: YAML syntax error: {}",
@@ -393,6 +399,25 @@ YamlFile YamlFile::parse(const std::string& text, const std::string& source_name
 const std::string& YamlFile::source() const { return context_->source; }
 
 YamlMap YamlFile::root() const { return YamlMap(context_, context_->root, ""); }
+
+int YamlFile::line_of_path(const std::string& dotted_key) const {
+  // A handle on the root; reset() rebinds it (assignment would write into the document), and
+  // lookups go through a const reference, whose operator[] never inserts.
+  YAML::Node node;
+  node.reset(context_->root);
+  std::size_t begin = 0;
+  while (true) {
+    if (!node.IsMap()) return 0;
+    const std::size_t dot = dotted_key.find('.', begin);
+    const std::string part = dotted_key.substr(begin, dot == std::string::npos ? dot : dot - begin);
+    const YAML::Node& map = node;
+    const YAML::Node next = map[part];
+    if (!next) return 0;
+    if (dot == std::string::npos) return line_of_node(next);
+    node.reset(next);
+    begin = dot + 1;
+  }
+}
 
 void YamlFile::check_all_keys_used() const {
   const detail::YamlContext& ctx = *context_;

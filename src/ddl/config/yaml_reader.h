@@ -114,6 +114,9 @@ class YamlFile {
 
   const std::string& source() const;
   YamlMap root() const;
+  /// 1-based line of the value at a dotted key path ("tracking.orb.scale_factor"), 0 when the
+  /// document does not hold it. Does not count as reading the key.
+  int line_of_path(const std::string& dotted_key) const;
   /// Throws ddl::ConfigError for the first key (in file order) that no reader asked for, and for
   /// duplicate keys, in the root and in every map that was opened with get_map/find_map.
   void check_all_keys_used() const;

@@ -29,8 +29,9 @@ void GeometryCheckConfig::validate() const {
     fail("max_window_radius_px", "must be in window_radius_px..64");
   if (min_seed_support < 1) fail("min_seed_support", "must be >= 1");
   if (!(region_depth_band_m > 0)) fail("region_depth_band_m", "must be > 0");
-  if (region_max_radius_px < 1) fail("region_max_radius_px", "must be >= 1");
-  if (dilation_px < 0) fail("dilation_px", "must be >= 0");
+  if (region_max_radius_px < 1 || region_max_radius_px > 4096)
+    fail("region_max_radius_px", "must be in 1..4096");
+  if (dilation_px < 0 || dilation_px > 50) fail("dilation_px", "must be in 0..50");
   if (!(max_median_residual_ratio > 0)) fail("max_median_residual_ratio", "must be > 0");
   if (!(max_seed_fraction > 0 && max_seed_fraction <= 1))
     fail("max_seed_fraction", "must be in (0, 1]");

@@ -90,7 +90,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   system.set_stored_mask_mapping(
       [&dataset](const cv::Mat& mask) { return dataset.undistort_mask(mask); });
   std::size_t end = dataset.size();
-  if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
+  if (options.max_frames > 0 && options.max_frames < end - begin) end = begin + options.max_frames;
   const std::size_t total = end - begin;
 
   RunOutcome outcome;
@@ -219,28 +219,41 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
 
   const auto gt = dataset.groundtruth_path();
   if (options.evaluate && gt && error == nullptr && outcome.statistics.frames_tracked >= 2) {
+    // A malformed ground-truth file is bad input: the run ends with its error (exit code 2)
+    // once summary.json is written. Failing to evaluate a run that is too short or too far from
+    // the ground truth only skips the evaluation (below).
+    std::optional<io::Trajectory> groundtruth;
     try {
-      const eval::EvalResult result = eval::evaluate(
-          io::read_tum_trajectory(*gt), system.camera_trajectory(), {}, *gt, camera_path.string());
-      const fs::path eval_dir = out_dir / "eval";
-      create_folder(eval_dir, "the evaluation");
-      eval::write_json_report((eval_dir / "eval.json").string(), result);
-      eval::write_eval_plots(result, eval_dir.string());
-      nlohmann::json ev = eval::to_json(result);
-      // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
-      // processed frames inside the ground-truth span, those with an estimated pose. Until
-      // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
-      // could push it above 1 (found by review).
-      const eval::TrackedStats tracked =
-          eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
-      ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;
-      summary["evaluation"] = ev;
-      spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
-                   result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
-                   result.rpe.rot_deg.rmse);
-    } catch (const Error& e) {
-      spdlog::warn("evaluation skipped: {}", e.what());
+      groundtruth = io::read_tum_trajectory(*gt);
+    } catch (const InputError& e) {
       summary["evaluation_error"] = e.what();
+      summary["failed"] = true;
+      error = std::current_exception();
+    }
+    if (groundtruth) {
+      try {
+        const eval::EvalResult result =
+            eval::evaluate(*groundtruth, system.camera_trajectory(), {}, *gt, camera_path.string());
+        const fs::path eval_dir = out_dir / "eval";
+        create_folder(eval_dir, "the evaluation");
+        eval::write_json_report((eval_dir / "eval.json").string(), result);
+        eval::write_eval_plots(result, eval_dir.string());
+        nlohmann::json ev = eval::to_json(result);
+        // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
+        // processed frames inside the ground-truth span, those with an estimated pose. Until
+        // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
+        // could push it above 1 (found by review).
+        const eval::TrackedStats tracked =
+            eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
+        ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;
+        summary["evaluation"] = ev;
+        spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
+                     result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
+                     result.rpe.rot_deg.rmse);
+      } catch (const Error& e) {
+        spdlog::warn("evaluation skipped: {}", e.what());
+        summary["evaluation_error"] = e.what();
+      }
     }
   }
   write_json(out_dir / "summary.json", summary);

@@ -54,8 +54,8 @@ void SegmenterConfig::validate() const {
                                  fmt::format("'{}' is not one of the model's classes", name));
     }
   }
-  if (num_threads < 1) {
-    throw ConfigError::for_key("dynamic.segmentation.num_threads", "must be >= 1");
+  if (num_threads < 1 || num_threads > 256) {
+    throw ConfigError::for_key("dynamic.segmentation.num_threads", "must be in 1..256");
   }
   if (dilation_px < 0 || dilation_px > 50) {
     throw ConfigError::for_key("dynamic.segmentation.dilation_px", "must be in 0..50");

@@ -177,14 +177,19 @@ struct WriteOptions {
   int png_compression = 1;                  // zlib level of the PNGs (1 = fast)
 };
 
-/// Writes the whole sequence into `out_dir` (created; existing files are overwritten):
+/// Writes the whole sequence into `out_dir`, which must be new, empty, or a sequence an earlier
+/// write_sequence wrote (its meta.json names the generator); the entries listed below are then
+/// removed first, so no file of the earlier sequence is left beside the new one. Any other
+/// folder with content is refused (ddl::InputError naming it): a TUM sequence or a run's
+/// outputs are never overwritten. Layout:
 ///   rgb/ depth/ dynamic_mask/ background/rgb/ background/depth/  (PNG, named <stamp>.png)
 ///   rgb.txt depth.txt associations.txt groundtruth.txt dynamic_mask.txt
 ///   accelerometer.txt  (when the source has readings)
 ///   void_mask/ void_mask.txt  (only when the source has void boxes)
 ///   background/rgb.txt background/depth.txt background/associations.txt
 ///   camera.yaml meta.json
-/// Throws ddl::InputError naming a file that cannot be written; ddl::Interrupted when stopped
+/// Throws ddl::InputError naming a file that cannot be written or the refused folder;
+/// ddl::Interrupted when stopped
 /// (the index files then list the frames written so far).
 void write_sequence(const SequenceSource& source, const std::string& out_dir,
                     const WriteOptions& options = {});

@@ -158,9 +158,52 @@ std::unique_ptr<SequenceSource> make_sequence_source(const SequenceConfig& confi
   return make_composite_sequence(config);
 }
 
+namespace {
+
+/// True when `dir/meta.json` says write_sequence wrote the folder.
+bool written_by_generator(const fs::path& dir) {
+  std::ifstream file(dir / "meta.json");
+  if (!file) return false;
+  try {
+    const nlohmann::json meta = nlohmann::json::parse(file);
+    return meta.is_object() && meta.value("generator", "") == "ddl_slam synth";
+  } catch (const nlohmann::json::exception&) {
+    return false;
+  }
+}
+
+/// The folder write_sequence may write into: new, empty, or an earlier generated sequence, whose
+/// own entries are removed.
+void prepare_output_folder(const fs::path& out) {
+  std::error_code ec;
+  if (!fs::exists(out, ec)) return;
+  if (!fs::is_directory(out, ec)) {
+    throw InputError::at(out.string(), "exists and is not a folder; give a new or empty folder");
+  }
+  if (fs::is_empty(out, ec)) return;
+  if (!written_by_generator(out)) {
+    throw InputError::at(out.string(),
+                         "is not empty and holds no sequence written by `ddl_slam synth` "
+                         "(meta.json); refusing to write into it: give a new or empty folder");
+  }
+  for (const char* entry : {"rgb", "depth", "dynamic_mask", "void_mask", "background", "rgb.txt",
+                            "depth.txt", "associations.txt", "groundtruth.txt", "dynamic_mask.txt",
+                            "void_mask.txt", "accelerometer.txt", "camera.yaml", "meta.json"}) {
+    fs::remove_all(out / entry, ec);
+    if (ec) {
+      throw InputError::at((out / entry).string(),
+                           "cannot remove the earlier sequence's entry: " + ec.message());
+    }
+  }
+  spdlog::info("synth: {}: replacing the sequence generated there before", out.string());
+}
+
+}  // namespace
+
 void write_sequence(const SequenceSource& source, const std::string& out_dir,
                     const WriteOptions& options) {
   const fs::path out(out_dir);
+  prepare_output_folder(out);
   const bool with_void = !source.config().void_boxes_w.empty();
   for (const char* sub :
        {"rgb", "depth", "dynamic_mask", "void_mask", "background/rgb", "background/depth"}) {
