@@ -113,7 +113,8 @@ void add_eval_dense_command(CLI::App& app, int& exit_code) {
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--camera", args->camera,
                   "Camera of the sequence (as `run --camera`); default <sequence>/camera.yaml");
-  cmd->add_option("--map", args->map_path, "Octree file to evaluate; default <run>/map.ot");
+  cmd->add_option("--map", args->map_path,
+                  "Octree file to evaluate; default <run>/map.ot, else <run>/map.bt");
   cmd->add_flag("--no-map", args->no_map, "Evaluate the inpainting only");
   cmd->add_option("--json", args->json_path, "Write the results as JSON to this file");
   cmd->add_option("--montage", args->montage_path,

@@ -58,7 +58,8 @@ struct LoopCloserConfig {
   LoopVerificationConfig verification;
   LoopCorrectionConfig correction;
   bool global_ba = true;                    // global BA after every loop correction
-  bool global_ba_in_background = false;     // run it in the closer's own thread (threaded mode)
+  bool global_ba_in_background = false;     // run it in the closer's own thread; a run sets it
+                                            // from `mode` (threaded: true), whatever is here
   optimization::OptimizerConfig optimizer;  // pose refinement, pose graph, global BA schedules
 
   /// Throws ddl::ConfigError naming the key ("loop.detection.consistency_threshold", ...).
