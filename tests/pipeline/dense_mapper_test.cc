@@ -107,6 +107,65 @@ TEST(DenseMapper, AMapResetDropsTheStoredKeyframesAndTheOctree) {
   }
 }
 
+// Review finding (stop 20): keyframes went into the octree at their tracking pose, before local
+// BA refined it (by up to 2 cm on syn_walking_xyz), and the end of the run rebuilt the octree only
+// after a loop closure. A keyframe now waits octree_delay_keyframes keyframes, goes in at the pose
+// it has then, and the end of the run rebuilds when an integrated keyframe moved by more than a
+// quarter voxel since.
+TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  const auto pose = [](int k, double shift_m) {
+    return SE3(Mat3d::Identity(), Vec3d(0.3 * k + shift_m, 0.0, 0.0));
+  };
+  struct Result {
+    std::size_t scans_before_finish = 0;
+    std::size_t rebuilds = 0;
+    std::size_t occupied = 0;
+  };
+  // Four keyframes of a wall 2 m away; `late` = {keyframe, shift} moves one of them after all
+  // four were submitted (as local BA would), before finish().
+  const auto run = [&](int delay, std::pair<int, double> late, bool shift_before_submit) {
+    auto map = std::make_shared<map::Map>();
+    DenseMapperConfig config;
+    config.inpainting_enabled = false;
+    config.octree_delay_keyframes = delay;
+    DenseMapper dense(config, camera, map);
+    std::vector<map::KeyFramePtr> keyframes;
+    for (int k = 0; k < 4; ++k) {
+      const double shift = shift_before_submit && k == late.first ? late.second : 0.0;
+      auto kf = std::make_shared<map::KeyFrame>(
+          map->next_keyframe_id(), k, std::make_shared<map::FrameFeatures>(), pose(k, shift));
+      map->add_keyframe(kf);
+      keyframes.push_back(kf);
+      cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40, 80, 120));
+      cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+      dense.submit({kf, bgr, depth, cv::Mat()});
+    }
+    Result r;
+    r.scans_before_finish = dense.octree()->stats().scans_integrated;
+    if (!shift_before_submit) keyframes[late.first]->set_T_c_w(pose(late.first, late.second));
+    dense.finish();
+    r.rebuilds = dense.stats().octree_rebuilds;
+    r.occupied = dense.octree()->stats().occupied_leaves;
+    return r;
+  };
+  // Keyframe 3 moves 3 cm while it waits: it goes in at its new pose, no rebuild needed.
+  const Result delayed = run(2, {3, 0.03}, false);
+  EXPECT_EQ(delayed.scans_before_finish, 2u);
+  EXPECT_EQ(delayed.rebuilds, 0u);
+  const Result truth = run(0, {3, 0.03}, true);  // every keyframe at its final pose from the start
+  EXPECT_EQ(truth.rebuilds, 0u);
+  EXPECT_EQ(delayed.occupied, truth.occupied);
+  // The premise: at its old pose keyframe 3 gives another map.
+  EXPECT_NE(run(0, {3, 0.0}, true).occupied, truth.occupied);
+  // Keyframe 0 moves 3 cm after it went in: the end of the run rebuilds; 5 mm (under a quarter of
+  // the 5 cm voxel) does not.
+  EXPECT_EQ(run(2, {0, 0.03}, false).rebuilds, 1u);
+  EXPECT_EQ(run(2, {0, 0.005}, false).rebuilds, 0u);
+  // At once (delay 0), as before: all four in before finish().
+  EXPECT_EQ(run(0, {0, 0.0}, false).scans_before_finish, 4u);
+}
+
 // A culled keyframe's own pose stops moving when it is culled; after a loop correction it must be
 // taken through its parent, as the camera trajectory takes it. Until 2026-11-26 inpainting used
 // its frozen pose as a source, and octree rebuilds left it out.

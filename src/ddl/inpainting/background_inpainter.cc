@@ -621,7 +621,6 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
     if (cv::countNonZero(small) > 0) {
       cv::Mat filled_bgr;
       cv::inpaint(out.bgr, small, filled_bgr, 3, cv::INPAINT_TELEA);
-      filled_bgr.copyTo(out.bgr, small);
       // Depth: grown in from the known depth around the hole, one pixel ring per pass, until the
       // hole is full or nothing known touches what is left (a hole inside unknown depth). Eight
       // passes used to be the limit, which left the middle of holes wider than 16 px without
@@ -641,6 +640,9 @@ InpaintingResult inpaint(const cv::Mat& bgr, const cv::Mat& depth_m, const cv::M
       // Filled are the hole pixels that got both colour and depth; the rest stay unfilled.
       cv::Mat with_depth;
       cv::bitwise_and(small, depth_fill > 0, with_depth);
+      // Only those take the image-inpainted colour: an unfilled pixel keeps what the camera saw
+      // (until 2026-11-27 it took the colour too, and no longer showed the person it marks).
+      filled_bgr.copyTo(out.bgr, with_depth);
       out.image_filled = with_depth;
       unfilled.setTo(0, with_depth);
     }

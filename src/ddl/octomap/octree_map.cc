@@ -70,11 +70,8 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
   };
   std::vector<ColourSum> sums;  // in the order the voxels are first seen
   std::unordered_map<::octomap::OcTreeKey, std::size_t, ::octomap::OcTreeKey::KeyHash> voxel;
-  // max_range_m bounds the ray (OctoMap's meaning): a longer ray still clears the space along its
-  // first max_range_m but marks nothing occupied, so it is inserted and not coloured. Until
-  // 2026-11-26 depth z was compared instead: rays off the image centre with z below the range
-  // but longer than it lost their endpoint, and rays beyond it cleared nothing.
-  const double max_range2 = config_.max_range_m * config_.max_range_m;
+  const ::octomap::point3d origin(static_cast<float>(t.x()), static_cast<float>(t.y()),
+                                  static_cast<float>(t.z()));
   for (int v = 0; v < scan.depth_m.rows; v += stride) {
     const float* drow = scan.depth_m.ptr<float>(v);
     const std::uint8_t* xrow = scan.exclude_mask.empty() ? nullptr : scan.exclude_mask.ptr(v);
@@ -88,7 +85,7 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
                                  static_cast<float>(p_w.z()));
       cloud.push_back(p);
       ::octomap::OcTreeKey key;  // the voxel of the point as inserted (floats)
-      if (p_c.squaredNorm() > max_range2 || !tree_->coordToKeyChecked(p, key)) continue;
+      if (!tree_->coordToKeyChecked(p, key)) continue;
       const auto [it, added] = voxel.try_emplace(key, sums.size());
       if (added) sums.push_back({key});
       ColourSum& sum = sums[it->second];
@@ -99,14 +96,18 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
       ++sum.n;
     }
   }
-  const ::octomap::point3d origin(static_cast<float>(t.x()), static_cast<float>(t.y()),
-                                  static_cast<float>(t.z()));
   tree_->insertPointCloud(cloud, origin, config_.max_range_m, /*lazy_eval=*/true,
                           /*discretize=*/true);
   auto mean = [](std::uint32_t total, std::uint32_t n) {
     return static_cast<std::uint8_t>((total + n / 2) / n);
   };
   for (const ColourSum& sum : sums) {
+    // max_range_m bounds the ray (OctoMap's meaning): a longer ray still clears the space along
+    // its first max_range_m but marks nothing occupied, so its voxel is not coloured. With
+    // discretize, OctoMap decides that for the voxel's centre, not for the points in it: the same
+    // test here, in its float arithmetic, so that no voxel is occupied without a colour or coloured
+    // while free (until 2026-11-27 each point's own range decided, about 4 cm either side of it).
+    if (!((tree_->keyToCoord(sum.key) - origin).norm() <= config_.max_range_m)) continue;
     tree_->averageNodeColor(sum.key, mean(sum.r, sum.n), mean(sum.g, sum.n), mean(sum.b, sum.n));
   }
   tree_->updateInnerOccupancy();

@@ -3,11 +3,14 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
@@ -28,6 +31,9 @@ void DenseMapperConfig::validate() const {
   }
   if (mask_border_px < 0 || mask_border_px > 50) {
     throw ConfigError::for_key("dense.mask_border_px", "must be in 0..50");
+  }
+  if (octree_delay_keyframes < 0 || octree_delay_keyframes > 1000) {
+    throw ConfigError::for_key("dense.octree_delay_keyframes", "must be in 0..1000");
   }
   inpainting.validate();
   octree.validate();
@@ -109,29 +115,94 @@ void DenseMapper::finish() {
   if (queue_) queue_->close();
   if (thread_.joinable()) thread_.join();
   if (error_) std::rethrow_exception(error_);
-  // Poses keep moving until the last global BA: integrate once more at the final poses.
-  if (octree_ && map_->big_change_index() != seen_big_change_) rebuild_octree();
+  // Poses keep moving until the last global BA, and local BA refines each keyframe after it was
+  // integrated (in deterministic mode the dense stage runs before local mapping sees the
+  // keyframe): integrate once more at the final poses when they moved.
+  if (!octree_) return;
+  if (map_->big_change_index() != seen_big_change_) {
+    rebuild_octree(0);
+    return;
+  }
+  integrate_due(0);  // the keyframes still waiting for their delay
+  if (poses_moved_since_integration()) rebuild_octree(0);
+}
+
+std::size_t DenseMapper::integrate_due(std::size_t keep_back) {
+  if (stored_.size() <= keep_back) return 0;
+  const std::size_t due = stored_.size() - keep_back;
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < due; ++i) {
+    if (!stored_[i].integrated) todo.push_back(i);
+  }
+  if (todo.empty()) return 0;
+  map_->read_consistent([&] {
+    for (const std::size_t i : todo) {
+      stored_[i].T_w_c_integrated = tracking::resolved_T_w_c(stored_[i].keyframe);
+    }
+  });
+  for (const std::size_t i : todo) {
+    Stored& s = stored_[i];
+    octree_->integrate({s.keyframe->id(), s.T_w_c_integrated, s.bgr, s.depth_m, s.exclude});
+    s.integrated = true;
+  }
+  return todo.size();
+}
+
+bool DenseMapper::poses_moved_since_integration() const {
+  const double tolerance_m = 0.25 * config_.octree.resolution_m;
+  // A rotation by angle a moves a point at the octree's range by a * range.
+  const double tolerance_rad = tolerance_m / config_.octree.max_range_m;
+  double max_m = 0.0;
+  double max_rad = 0.0;
+  map_->read_consistent([&] {
+    for (const Stored& s : stored_) {
+      if (!s.integrated) continue;
+      const SE3 T_now_then = tracking::resolved_T_w_c(s.keyframe).inverse() * s.T_w_c_integrated;
+      max_m = std::max(max_m, T_now_then.translation().norm());
+      max_rad = std::max(max_rad, T_now_then.rotation_angle());
+    }
+  });
+  const bool moved = max_m > tolerance_m || max_rad > tolerance_rad;
+  spdlog::info(
+      "dense mapping: keyframes moved by up to {:.4f} m and {:.3f} deg since they went "
+      "into the octree{}",
+      max_m, max_rad * 180.0 / M_PI, moved ? ": rebuilding it at the final poses" : "");
+  return moved;
 }
 
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
-  Stored stored{item.keyframe, item.bgr, item.depth_m, cv::Mat(), cv::Mat(), cv::Mat(), nullptr};
+  Stored stored{item.keyframe, item.bgr,  item.depth_m, cv::Mat(),
+                cv::Mat(),     cv::Mat(), nullptr,      SE3()};
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
-  if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
+  const bool repair = config_.inpainting_enabled && cv::countNonZero(mask) > 0;
+  const std::size_t n =
+      !repair ? 0
+              : std::min<std::size_t>(stored_.size(),
+                                      static_cast<std::size_t>(config_.inpainting.num_keyframes +
+                                                               config_.inpainting.extra_keyframes));
+  // The poses of the keyframe and its sources, in one reading: local BA and loop correction
+  // write poses under the map's update lock, and a repair from two world frames would stay in the
+  // stored images. A culled keyframe is at its parent-resolved pose, since its own froze when it
+  // was culled: for sources since 2026-11-26; for the keyframe itself since 2026-11-27 (culled
+  // while queued, it was repaired and integrated at the frozen pose, across a loop correction).
+  SE3 T_w_c;
+  std::vector<SE3> T_w_sources(n);
+  map_->read_consistent([&] {
+    T_w_c = tracking::resolved_T_w_c(item.keyframe);
+    for (std::size_t k = 0; k < n; ++k) {
+      T_w_sources[k] = tracking::resolved_T_w_c(stored_[stored_.size() - 1 - k].keyframe);
+    }
+  });
+  if (repair) {
     std::vector<inpainting::SourceView> sources;
-    const std::size_t n = std::min<std::size_t>(
-        stored_.size(), static_cast<std::size_t>(config_.inpainting.num_keyframes +
-                                                 config_.inpainting.extra_keyframes));
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
-      // A culled source at its parent-resolved pose: its own pose froze when it was culled (until
-      // 2026-11-26 inpainting used that frozen pose, and rebuilds skipped culled keyframes).
-      sources.push_back({tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude,
-                         s.repaired, s.blocks});
+      sources.push_back({T_w_sources[k], s.bgr, s.depth_m, s.exclude, s.repaired, s.blocks});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
-        item.bgr, item.depth_m, mask, item.keyframe->T_c_w(), sources, camera_, config_.inpainting);
+        item.bgr, item.depth_m, mask, T_w_c.inverse(), sources, camera_, config_.inpainting);
     stored.bgr = r.bgr;
     stored.depth_m = r.depth_m;
     stored.unfilled = r.unfilled;
@@ -152,7 +223,7 @@ void DenseMapper::process(DenseKeyframe item) {
     const int k = 2 * config_.mask_border_px + 1;
     cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
     cv::Mat exclude;
-    cv::bitwise_or(stored.unfilled, grown & ~mask, exclude);
+    cv::bitwise_or(stored.unfilled, grown & (mask == 0), exclude);
     stored.exclude = exclude;
   } else {
     stored.exclude = stored.unfilled;
@@ -181,14 +252,12 @@ void DenseMapper::process(DenseKeyframe item) {
     const int big_change = map_->big_change_index();
     // Per-keyframe integration and whole-map rebuilds are timed apart: a rebuild costs all
     // keyframes at once.
+    const auto delay = static_cast<std::size_t>(config_.octree_delay_keyframes);
+    stored_.push_back(std::move(stored));
     if (big_change != seen_big_change_) {
-      stored_.push_back(stored);
-      rebuild_octree();
+      rebuild_octree(delay);
       timings_.record("octomap_rebuild", watch.elapsed_ms());
-    } else {
-      octree_->integrate({item.keyframe->id(), item.keyframe->T_w_c(), stored.bgr, stored.depth_m,
-                          stored.exclude});
-      stored_.push_back(std::move(stored));
+    } else if (integrate_due(delay) > 0) {
       timings_.record("octomap", watch.elapsed_ms());
     }
   } else {
@@ -198,13 +267,11 @@ void DenseMapper::process(DenseKeyframe item) {
   ++stats_.keyframes;
 }
 
-void DenseMapper::rebuild_octree() {
+void DenseMapper::rebuild_octree(std::size_t keep_back) {
   seen_big_change_ = map_->big_change_index();
   octree_->clear();
-  for (const Stored& s : stored_) {
-    octree_->integrate(
-        {s.keyframe->id(), tracking::resolved_T_w_c(s.keyframe), s.bgr, s.depth_m, s.exclude});
-  }
+  for (Stored& s : stored_) s.integrated = false;
+  integrate_due(keep_back);
   std::lock_guard lock(stats_mutex_);
   ++stats_.octree_rebuilds;
 }

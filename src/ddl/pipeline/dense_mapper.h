@@ -40,6 +40,10 @@ struct DenseMapperConfig {
   /// Pixels this close outside a keyframe's dynamic mask (object edges the mask missed) are
   /// neither a background source for later keyframes nor put into the octree.
   int mask_border_px = 12;
+  /// A keyframe goes into the octree this many keyframes after it was made, so that local BA has
+  /// refined its pose by then (it moves keyframes by up to 2 cm on syn_walking_xyz); the last
+  /// ones go in when the run ends. 0 = at once. The octree is complete only after finish().
+  int octree_delay_keyframes = 10;
   inpainting::InpaintingConfig inpainting;
   octomap::OctreeConfig octree;
 
@@ -76,7 +80,8 @@ class DenseMapper {
   /// inpainting sources and the octree is emptied. Ordered with submit(): in threaded mode it
   /// travels through the queue behind the keyframes submitted before it.
   void reset();
-  /// Drains the queue, joins the thread, rebuilds the octree once more if poses moved since.
+  /// Drains the queue, joins the thread, rebuilds the octree once more if poses moved since
+  /// (a big change, or any keyframe moved by more than a quarter voxel).
   void finish();
   /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`.
   std::vector<std::string> write_outputs(const std::string& dir) const;
@@ -94,6 +99,8 @@ class DenseMapper {
     cv::Mat exclude;   // unfilled and the border band around the mask: not a source, not mapped
     cv::Mat repaired;  // pixels its own repair filled (a source after observed pixels)
     std::shared_ptr<const inpainting::DepthBlocks> blocks;  // of depth_m, for later repairs
+    SE3 T_w_c_integrated;     // the pose it went into the octree at (rebuild when it moved)
+    bool integrated = false;  // in the octree (octree_delay_keyframes)
   };
   struct ResetRequest {};
   using Item = std::variant<DenseKeyframe, ResetRequest>;
@@ -101,7 +108,15 @@ class DenseMapper {
   void handle(Item item);
   void process(DenseKeyframe item);
   void drop_stored();
-  void rebuild_octree();
+  /// Clears the octree and integrates every stored keyframe but the newest `keep_back` at its
+  /// current pose.
+  void rebuild_octree(std::size_t keep_back);
+  /// Integrates the stored keyframes that are due (all but the newest `keep_back`) and not in
+  /// the octree yet; returns how many.
+  std::size_t integrate_due(std::size_t keep_back);
+  /// Whether a stored keyframe's pose moved since it went into the octree by more than a
+  /// quarter voxel, at the octree's range (local BA refines poses without a big change).
+  bool poses_moved_since_integration() const;
 
   DenseMapperConfig config_;
   camera::PinholeCamera camera_;
