@@ -7,8 +7,12 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <opencv2/imgproc.hpp>
 #include <set>
+#include <string>
 #include <tuple>
 
 #include "config_error_check.h"
@@ -151,6 +155,54 @@ TEST(OctreeMap, ExcludedPixelsAreNotInserted) {
   map.integrate(scan);
   const auto* node = map.tree().search(0.0, 0.0, 1.5);
   EXPECT_TRUE(node == nullptr || !map.tree().isNodeOccupied(node));
+}
+
+std::string file_bytes(const fs::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+}
+
+// The dense stage keeps old keyframes only with the pixels integrate() uses (stop 20): a scan
+// subsampled to them gives the same octree, voxel for voxel and colour for colour, also near the
+// max range, across an exclusion mask and for an image size the stride does not divide.
+TEST(OctreeMap, ASubsampledScanGivesTheSameOctree) {
+  const fs::path dir = fs::temp_directory_path() / "ddl_octomap_subsampled_test";
+  fs::create_directories(dir);
+  for (const int stride : {1, 3, 4}) {
+    OctreeConfig config;
+    config.pixel_stride = stride;
+    config.max_range_m = 3.2;
+    OctreeMap full(config, synthetic::tum3_camera());
+    OctreeMap compact(config, synthetic::tum3_camera());
+    KeyframeScan scan = wall_scan(true, 0);
+    scan.T_w_c = SE3(so3_exp(Vec3d(0.05, -0.1, 0.02)), Vec3d(0.1, 0.2, -0.3));
+    for (int v = 0; v < scan.depth_m.rows; ++v) {  // a slanted wall around the max range
+      for (int u = 0; u < scan.depth_m.cols; ++u) {
+        float& z = scan.depth_m.at<float>(v, u);
+        if (z > 2.0f) z = 2.6f + 0.0015f * static_cast<float>(u);
+        scan.bgr.at<cv::Vec3b>(v, u)[1] = static_cast<std::uint8_t>((u * 7 + v * 13) % 256);
+      }
+    }
+    scan.exclude_mask = cv::Mat::zeros(scan.depth_m.size(), CV_8UC1);
+    cv::rectangle(scan.exclude_mask, cv::Rect(100, 50, 90, 70), cv::Scalar(255), cv::FILLED);
+    full.integrate(scan);
+    const KeyframeScan small = subsampled(scan, stride);
+    EXPECT_EQ(small.depth_m.cols, (640 + stride - 1) / stride);
+    compact.integrate(small);
+    ASSERT_GT(full.stats().occupied_leaves, 1000u);
+    EXPECT_EQ(compact.stats().occupied_leaves, full.stats().occupied_leaves) << stride;
+    EXPECT_EQ(compact.stats().free_leaves, full.stats().free_leaves) << stride;
+    full.write_ot((dir / "full.ot").string());
+    compact.write_ot((dir / "compact.ot").string());
+    EXPECT_EQ(file_bytes(dir / "full.ot"), file_bytes(dir / "compact.ot")) << stride;
+    if (stride > 1) {
+      OctreeConfig other = config;
+      other.pixel_stride = stride + 1;
+      OctreeMap wrong(other, synthetic::tum3_camera());
+      EXPECT_THROW(wrong.integrate(small), Error);
+    }
+  }
+  fs::remove_all(dir);
 }
 
 // A full disk and a cut-off file are clear errors naming the file. OctoMap's write(filename)

@@ -166,6 +166,85 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
   EXPECT_EQ(run(0, {0, 0.0}, false).scans_before_finish, 4u);
 }
 
+// Review finding (stop 20): every keyframe stayed stored with its full images (about 3 MB at
+// 640x480) for the whole run. Keyframes past the inpainting sources now keep only the pixels an
+// octree rebuild uses; a rebuild from them gives the octree that full images give.
+TEST(DenseMapper, OldKeyframesKeepOnlyWhatARebuildNeeds) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  const int n = 12;
+  const auto pose = [](int k, double shift_m) {
+    return SE3(so3_exp(Vec3d(0.0, 0.02 * k, 0.0)), Vec3d(0.1 * k + shift_m, 0.0, 0.0));
+  };
+  const auto images = [&](int k) {
+    cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40 + 10 * k, 80, 120));
+    cv::Mat depth(camera.height, camera.width, CV_32FC1);
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        depth.at<float>(v, u) = 1.5f + 0.002f * static_cast<float>(u + v) + 0.05f * k;
+      }
+    }
+    cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    cv::rectangle(mask, cv::Rect(200 + 10 * k, 150, 80, 120), cv::Scalar(255), cv::FILLED);
+    return std::make_tuple(bgr, depth, mask);
+  };
+  auto map = std::make_shared<map::Map>();
+  DenseMapperConfig config;
+  config.inpainting.num_keyframes = 3;  // sources: the newest 3 + 2
+  config.inpainting.extra_keyframes = 2;
+  config.octree_delay_keyframes = 2;
+  DenseMapper dense(config, camera, map);
+  std::vector<map::KeyFramePtr> keyframes;
+  for (int k = 0; k < n; ++k) {
+    auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
+                                              std::make_shared<map::FrameFeatures>(), pose(k, 0.0));
+    map->add_keyframe(kf);
+    keyframes.push_back(kf);
+    auto [bgr, depth, mask] = images(k);
+    dense.submit({kf, bgr, depth, mask});
+  }
+  // Keyframe 1 moves after it went in: the end of the run rebuilds from the compacted keyframes.
+  keyframes[1]->set_T_c_w(pose(1, 0.04));
+  dense.finish();
+  EXPECT_EQ(dense.stats().octree_rebuilds, 1u);
+  // One full keyframe: colour, depth, exclusion and the repaired mask (the unfilled one shares
+  // the exclusion's buffer or adds one more byte per pixel).
+  const std::size_t full =
+      static_cast<std::size_t>(camera.width) * camera.height * (3 + 4 + 1 + 1 + 1);
+  EXPECT_LE(dense.stats().peak_stored_image_bytes, 6 * full + (n - 5) * full / 16 + full / 8);
+  EXPECT_GE(dense.stats().peak_stored_image_bytes, 5 * full / 2);
+
+  // Without inpainting every keyframe is compacted at once; the octree the end of the run rebuilds
+  // from them is the one the full scans give, each at its final pose, outside the mask and its
+  // border band.
+  auto map_b = std::make_shared<map::Map>();
+  DenseMapperConfig no_repair = config;
+  no_repair.inpainting_enabled = false;
+  DenseMapper compacted(no_repair, camera, map_b);
+  octomap::OctreeMap reference(no_repair.octree, camera);
+  std::vector<map::KeyFramePtr> keyframes_b;
+  for (int k = 0; k < n; ++k) {
+    auto kf = std::make_shared<map::KeyFrame>(map_b->next_keyframe_id(), k,
+                                              std::make_shared<map::FrameFeatures>(), pose(k, 0.0));
+    map_b->add_keyframe(kf);
+    keyframes_b.push_back(kf);
+    auto [bgr, depth, mask] = images(k);
+    compacted.submit({kf, bgr, depth, mask});
+  }
+  keyframes_b[1]->set_T_c_w(pose(1, 0.04));
+  compacted.finish();
+  EXPECT_EQ(compacted.stats().octree_rebuilds, 1u);
+  EXPECT_LE(compacted.stats().peak_stored_image_bytes, (n + 1) * full / 16);
+  const int band = 2 * no_repair.mask_border_px + 1;
+  for (int k = 0; k < n; ++k) {
+    auto [bgr, depth, mask] = images(k);
+    cv::Mat exclude;
+    cv::dilate(mask, exclude, cv::getStructuringElement(cv::MORPH_ELLIPSE, {band, band}));
+    reference.integrate({keyframes_b[k]->id(), keyframes_b[k]->T_w_c(), bgr, depth, exclude});
+  }
+  EXPECT_EQ(compacted.octree()->stats().occupied_leaves, reference.stats().occupied_leaves);
+  EXPECT_EQ(compacted.octree()->stats().free_leaves, reference.stats().free_leaves);
+}
+
 // A culled keyframe's own pose stops moving when it is culled; after a loop correction it must be
 // taken through its parent, as the camera trajectory takes it. Until 2026-11-26 inpainting used
 // its frozen pose as a source, and octree rebuilds left it out.

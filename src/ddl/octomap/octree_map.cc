@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -54,12 +55,41 @@ void OctreeMap::clear() {
   scans_ = 0;
 }
 
+KeyframeScan subsampled(const KeyframeScan& scan, int pixel_stride) {
+  if (pixel_stride < 1 || scan.pixel_step != 1) {
+    throw Error("octree: subsampled() takes a full-resolution scan and a stride >= 1");
+  }
+  const auto pick = [pixel_stride](const cv::Mat& image) {
+    if (image.empty()) return cv::Mat();
+    const int rows = (image.rows + pixel_stride - 1) / pixel_stride;
+    const int cols = (image.cols + pixel_stride - 1) / pixel_stride;
+    cv::Mat out(rows, cols, image.type());
+    const std::size_t bytes = image.elemSize();
+    for (int v = 0; v < rows; ++v) {
+      const std::uint8_t* in_row = image.ptr(v * pixel_stride);
+      std::uint8_t* out_row = out.ptr(v);
+      for (int u = 0; u < cols; ++u) {
+        std::memcpy(out_row + u * bytes, in_row + u * pixel_stride * bytes, bytes);
+      }
+    }
+    return out;
+  };
+  KeyframeScan out{scan.keyframe_id,        scan.T_w_c,  pick(scan.bgr), pick(scan.depth_m),
+                   pick(scan.exclude_mask), pixel_stride};
+  return out;
+}
+
 void OctreeMap::integrate(const KeyframeScan& scan) {
   Stopwatch watch;
   ::octomap::Pointcloud cloud;
   const Mat3d R = scan.T_w_c.rotation();
   const Vec3d t = scan.T_w_c.translation();
-  const int stride = config_.pixel_stride;
+  if (scan.pixel_step != 1 && scan.pixel_step != config_.pixel_stride) {
+    throw Error(fmt::format("octree: a scan subsampled by {} does not fit pixel_stride {}",
+                            scan.pixel_step, config_.pixel_stride));
+  }
+  const int scale = scan.pixel_step;  // image pixel -> camera pixel
+  const int stride = scale == 1 ? config_.pixel_stride : 1;
   // The scan's colour of a voxel is the mean of its points (one tree search per voxel, not per
   // point); it is averaged into the voxel's colour so far, after the insertion. Colours go to the
   // leaves (found by key, which needs no inner node); one update of the inner nodes afterwards
@@ -79,7 +109,7 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
       const float z = drow[u];
       if (!(z >= config_.min_range_m)) continue;  // also no measurement (0) and NaN
       if (xrow != nullptr && xrow[u] != 0) continue;
-      const Vec3d p_c = camera_.unproject(u, v, z);
+      const Vec3d p_c = camera_.unproject(u * scale, v * scale, z);
       const Vec3d p_w = R * p_c + t;
       const ::octomap::point3d p(static_cast<float>(p_w.x()), static_cast<float>(p_w.y()),
                                  static_cast<float>(p_w.z()));

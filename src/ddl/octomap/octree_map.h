@@ -45,7 +45,15 @@ struct KeyframeScan {
   cv::Mat bgr;           // CV_8UC3 (repaired)
   cv::Mat depth_m;       // CV_32FC1 metres (repaired), 0 = none
   cv::Mat exclude_mask;  // CV_8UC1 non-zero = do not insert (still dynamic); may be empty
+  /// 1: the images are the camera's. OctreeConfig::pixel_stride: they hold only the pixels
+  /// integrate() uses, pixel (u, v) standing for the camera's (u * step, v * step)
+  /// (subsampled(): the same voxels at a sixteenth of the memory for the default stride 4).
+  int pixel_step = 1;
 };
+
+/// The pixels of `scan` that OctreeMap::integrate uses with `pixel_stride`, and only those
+/// (pixel_step = pixel_stride): integrating it gives the same octree as integrating `scan`.
+KeyframeScan subsampled(const KeyframeScan& scan, int pixel_stride);
 
 struct OctreeStats {
   std::size_t scans_integrated = 0;
@@ -61,6 +69,7 @@ class OctreeMap {
   OctreeMap(const OctreeMap&) = delete;
   OctreeMap& operator=(const OctreeMap&) = delete;
 
+  /// Throws ddl::Error when scan.pixel_step is neither 1 nor the configured pixel_stride.
   void integrate(const KeyframeScan& scan);
   /// Drops everything (before re-integration with corrected poses).
   void clear();

@@ -142,7 +142,8 @@ std::size_t DenseMapper::integrate_due(std::size_t keep_back) {
   });
   for (const std::size_t i : todo) {
     Stored& s = stored_[i];
-    octree_->integrate({s.keyframe->id(), s.T_w_c_integrated, s.bgr, s.depth_m, s.exclude});
+    octree_->integrate(
+        {s.keyframe->id(), s.T_w_c_integrated, s.bgr, s.depth_m, s.exclude, s.pixel_step});
     s.integrated = true;
   }
   return todo.size();
@@ -263,8 +264,47 @@ void DenseMapper::process(DenseKeyframe item) {
   } else {
     stored_.push_back(std::move(stored));
   }
+  compact_old_keyframes();
   std::lock_guard lock(stats_mutex_);
   ++stats_.keyframes;
+}
+
+void DenseMapper::compact_old_keyframes() {
+  const std::size_t sources = config_.inpainting_enabled
+                                  ? static_cast<std::size_t>(config_.inpainting.num_keyframes +
+                                                             config_.inpainting.extra_keyframes)
+                                  : 0;
+  const std::size_t old_end = stored_.size() > sources ? stored_.size() - sources : 0;
+  for (std::size_t i = 0; i < old_end; ++i) {
+    Stored& s = stored_[i];
+    if (s.pixel_step > 1 || (s.bgr.empty() && s.depth_m.empty())) continue;
+    if (octree_) {
+      const int stride = config_.octree.pixel_stride;
+      if (stride > 1) {
+        const octomap::KeyframeScan c =
+            octomap::subsampled({s.keyframe->id(), SE3(), s.bgr, s.depth_m, s.exclude}, stride);
+        s.bgr = c.bgr;
+        s.depth_m = c.depth_m;
+        s.exclude = c.exclude_mask;
+        s.pixel_step = stride;
+      }
+    } else {
+      s.bgr.release();
+      s.depth_m.release();
+      s.exclude.release();
+    }
+    s.unfilled.release();
+    s.repaired.release();
+    s.blocks.reset();
+  }
+  std::size_t bytes = 0;
+  const auto size_of = [](const cv::Mat& m) { return m.empty() ? 0 : m.total() * m.elemSize(); };
+  for (const Stored& s : stored_) {
+    bytes += size_of(s.bgr) + size_of(s.depth_m) + size_of(s.exclude) + size_of(s.repaired);
+    if (s.unfilled.data != s.exclude.data) bytes += size_of(s.unfilled);
+  }
+  std::lock_guard lock(stats_mutex_);
+  stats_.peak_stored_image_bytes = std::max(stats_.peak_stored_image_bytes, bytes);
 }
 
 void DenseMapper::rebuild_octree(std::size_t keep_back) {

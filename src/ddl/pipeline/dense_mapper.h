@@ -64,6 +64,9 @@ struct DenseStats {
   long image_filled_pixels = 0;
   std::size_t octree_rebuilds = 0;
   std::size_t resets = 0;  // map resets: stored keyframes and the octree dropped
+  /// Most bytes the stored keyframes' images held at once: the inpainting sources at full
+  /// resolution, older keyframes only with the pixels an octree rebuild uses.
+  std::size_t peak_stored_image_bytes = 0;
 };
 
 class DenseMapper {
@@ -101,6 +104,7 @@ class DenseMapper {
     std::shared_ptr<const inpainting::DepthBlocks> blocks;  // of depth_m, for later repairs
     SE3 T_w_c_integrated;     // the pose it went into the octree at (rebuild when it moved)
     bool integrated = false;  // in the octree (octree_delay_keyframes)
+    int pixel_step = 1;       // > 1: compacted to the octree's pixels (no longer a source)
   };
   struct ResetRequest {};
   using Item = std::variant<DenseKeyframe, ResetRequest>;
@@ -114,6 +118,9 @@ class DenseMapper {
   /// Integrates the stored keyframes that are due (all but the newest `keep_back`) and not in
   /// the octree yet; returns how many.
   std::size_t integrate_due(std::size_t keep_back);
+  /// Keyframes older than the inpainting sources keep only what an octree rebuild needs (its
+  /// pixel_stride's pixels of colour, depth and exclusion mask), or nothing without an octree.
+  void compact_old_keyframes();
   /// Whether a stored keyframe's pose moved since it went into the octree by more than a
   /// quarter voxel, at the octree's range (local BA refines poses without a big change).
   bool poses_moved_since_integration() const;

@@ -59,7 +59,8 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
             {"masked_pixels", s.dense.masked_pixels},
             {"filled_pixels", s.dense.filled_pixels},
             {"image_filled_pixels", s.dense.image_filled_pixels},
-            {"octree_rebuilds", s.dense.octree_rebuilds}}}};
+            {"octree_rebuilds", s.dense.octree_rebuilds},
+            {"peak_stored_image_bytes", s.dense.peak_stored_image_bytes}}}};
 }
 
 }  // namespace
