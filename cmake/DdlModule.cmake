@@ -15,8 +15,10 @@ endfunction()
 #   Tests find ../shared through the DDL_SHARED_DIR environment variable set here.
 function(ddl_add_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
-  add_executable(test_${name} ${ARG_SOURCES})
-  target_link_libraries(test_${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  # serial_opencv_under_tsan.cc: OpenCV on one thread under ThreadSanitizer (see the file).
+  add_executable(test_${name} ${ARG_SOURCES}
+                 ${PROJECT_SOURCE_DIR}/tests/common/serial_opencv_under_tsan.cc)
+  target_link_libraries(test_${name} PRIVATE ${ARG_DEPS} opencv_core GTest::gtest GTest::gtest_main)
   target_include_directories(test_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/common)
   target_compile_definitions(test_${name} PRIVATE
     DDL_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
