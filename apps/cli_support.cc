@@ -105,18 +105,14 @@ void Progress::update(std::size_t done, const std::string& note) {
   std::fflush(stderr);
 }
 
-void Progress::finish(const std::string& note) {
-  if (finished_) return;
-  last_print_s_ = -1e9;
-  update(total_, note);
-  if (tty_) std::fputc('\n', stderr);
-  finished_ = true;
-}
+void Progress::finish(const std::string& note) { finish_at(total_, note); }
 
-void Progress::finish_early(const std::string& note) {
+void Progress::finish_early(const std::string& note) { finish_at(done_, note); }
+
+void Progress::finish_at(std::size_t done, const std::string& note) {
   if (finished_) return;
   last_print_s_ = -1e9;
-  update(done_, note);
+  update(done, note);
   if (tty_) std::fputc('\n', stderr);
   finished_ = true;
 }

@@ -37,6 +37,7 @@ class Progress {
   void finish_early(const std::string& note);
 
  private:
+  void finish_at(std::size_t done, const std::string& note);
   std::string label_;
   std::size_t total_;
   bool tty_;

@@ -55,12 +55,18 @@ json read_json(const fs::path& path) {
   return json::parse(file);
 }
 
+/// `path` in single quotes, for a shell command line.
+std::string quoted(const fs::path& path) { return std::string("'") + path.string() + "'"; }
+
+/// `ddl_slam --log-level warn SUBCOMMAND --shared-dir <shared> ARGS` as a shell command line.
+std::string ddl_slam(const std::string& subcommand, const std::string& args) {
+  return std::string("'") + DDL_SLAM_BINARY + "' --log-level warn " + subcommand +
+         " --shared-dir '" + shared_dir() + "' " + args;
+}
+
 class Bench : public ::testing::Test {
  public:
-  static std::string command(const std::string& args) {
-    return std::string("'") + DDL_SLAM_BINARY + "' --log-level warn bench --shared-dir '" +
-           shared_dir() + "' " + args;
-  }
+  static std::string command(const std::string& args) { return ddl_slam("bench", args); }
 
  protected:
   static void SetUpTestSuite() {
@@ -284,10 +290,9 @@ TEST(SynthBackground, TheCompositeUsesTheBackgroundsCamera) {
   out_assoc.close();
   fs::copy_file(real / "groundtruth.txt", bg / "groundtruth.txt");
   std::string log;
-  const std::string command = std::string("'") + DDL_SLAM_BINARY +
-                              "' --log-level warn synth --shared-dir '" + shared_dir() +
-                              "' --preset syn_walking_xyz --frames 3 --background '" + bg.string() +
-                              "' --out '" + (root / "out").string() + "'";
+  const std::string command =
+      ddl_slam("synth", "--preset syn_walking_xyz --frames 3 --background " + quoted(bg) +
+                            " --out " + quoted(root / "out"));
   ASSERT_EQ(run_shell(command, root / "synth.log", &log), 0) << log;
   std::ifstream camera_file(root / "out" / "camera.yaml");
   std::stringstream camera;
@@ -301,10 +306,9 @@ TEST(SynthBackground, TheCompositeUsesTheBackgroundsCamera) {
 // trajectories and exited 0.
 TEST_F(Bench, AFirstFrameBeyondTheSequenceIsBadInput) {
   std::string log;
-  const std::string command = std::string("'") + DDL_SLAM_BINARY +
-                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
-                              (*root_ / "walk").string() + "' --first-frame 1000 --out '" +
-                              (*root_ / "first_frame").string() + "'";
+  const std::string command =
+      ddl_slam("run", quoted(*root_ / "walk") + " --first-frame 1000 --out " +
+                          quoted(*root_ / "first_frame"));
   EXPECT_EQ(run_shell(command, *root_ / "first_frame.log", &log), 2);
   EXPECT_NE(log.find("--first-frame"), std::string::npos) << log;
   EXPECT_NE(log.find("40 frames"), std::string::npos) << log;
@@ -327,10 +331,8 @@ TEST_F(Bench, TheTrackedRatioCountsOnlyFramesInsideTheGroundTruth) {
   }
   half.close();
   const fs::path out = *root_ / "half_truth_run";
-  const std::string command = std::string("'") + DDL_SLAM_BINARY +
-                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
-                              sequence.string() + "' --no-dynamic --no-octomap --no-inpainting " +
-                              "--out '" + out.string() + "'";
+  const std::string command = ddl_slam(
+      "run", quoted(sequence) + " --no-dynamic --no-octomap --no-inpainting --out " + quoted(out));
   std::string log;
   ASSERT_EQ(run_shell(command, *root_ / "half_truth.log", &log), 0) << log;
   const json summary = read_json(out / "summary.json");
@@ -351,10 +353,8 @@ std::string read_text(const fs::path& path) {
 TEST_F(Bench, NegativeFrameCountsAreBadInput) {
   for (const std::string option : {"--max-frames -3", "--first-frame -1"}) {
     std::string log;
-    const std::string command = std::string("'") + DDL_SLAM_BINARY +
-                                "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
-                                (*root_ / "walk").string() + "' " + option + " --out '" +
-                                (*root_ / "negative").string() + "'";
+    const std::string command = ddl_slam(
+        "run", quoted(*root_ / "walk") + " " + option + " --out " + quoted(*root_ / "negative"));
     EXPECT_EQ(run_shell(command, *root_ / "negative.log", &log), 2) << option << ": " << log;
     EXPECT_NE(log.find(option.substr(0, option.find(' '))), std::string::npos) << log;
   }
@@ -382,10 +382,9 @@ TEST_F(Bench, AMalformedGroundTruthIsBadInputAfterTheOutputsAreWritten) {
   bad.close();
   ASSERT_GT(broken_line, 0);
   const fs::path out = *root_ / "bad_truth_run";
-  const std::string command = std::string("'") + DDL_SLAM_BINARY +
-                              "' --log-level warn run --shared-dir '" + shared_dir() + "' '" +
-                              sequence.string() + "' --no-dynamic --no-octomap --no-inpainting " +
-                              "--max-frames 20 --out '" + out.string() + "'";
+  const std::string command =
+      ddl_slam("run", quoted(sequence) + " --no-dynamic --no-octomap --no-inpainting " +
+                          "--max-frames 20 --out " + quoted(out));
   std::string log;
   EXPECT_EQ(run_shell(command, *root_ / "bad_truth.log", &log), 2) << log;
   EXPECT_NE(log.find("groundtruth.txt:" + std::to_string(broken_line)), std::string::npos) << log;
@@ -407,9 +406,7 @@ TEST_F(Bench, SynthRefusesAFolderItDidNotWrite) {
   fs::remove_all(folder);
   fs::create_directories(folder);
   { std::ofstream(folder / "groundtruth.txt") << "# someone's ground truth\n"; }
-  const std::string synth = std::string("'") + DDL_SLAM_BINARY +
-                            "' --log-level warn synth --shared-dir '" + shared_dir() +
-                            "' --preset syn_static_xyz --frames ";
+  const std::string synth = ddl_slam("synth", "--preset syn_static_xyz --frames ");
   std::string log;
   EXPECT_EQ(run_shell(synth + "3 --out '" + folder.string() + "'", *root_ / "synth1.log", &log), 2)
       << log;
@@ -435,9 +432,8 @@ TEST_F(Bench, SynthRefusesAFolderItDidNotWrite) {
 // The viewer only reads: a deterministic run writes the same trajectory with and without it, and
 // its images are the frames asked for, both panels side by side.
 TEST_F(Bench, TheViewerDrawsTheFramesAskedForAndChangesNoTrajectory) {
-  const std::string run =
-      std::string("'") + DDL_SLAM_BINARY + "' --log-level warn run --shared-dir '" + shared_dir() +
-      "' '" + (*root_ / "walk").string() + "' --max-frames 20 --no-octomap --no-inpainting --out ";
+  const std::string run = ddl_slam(
+      "run", quoted(*root_ / "walk") + " --max-frames 20 --no-octomap --no-inpainting --out ");
   const fs::path plain = *root_ / "viewer_off";
   const fs::path viewed = *root_ / "viewer_on";
   ASSERT_EQ(run_shell(run + "'" + plain.string() + "'", *root_ / "viewer_off.log"), 0);

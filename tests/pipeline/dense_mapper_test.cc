@@ -187,24 +187,30 @@ TEST(DenseMapper, OldKeyframesKeepOnlyWhatARebuildNeeds) {
     cv::rectangle(mask, cv::Rect(200 + 10 * k, 150, 80, 120), cv::Scalar(255), cv::FILLED);
     return std::make_tuple(bgr, depth, mask);
   };
+  // Submits the n keyframes, then moves keyframe 1 by 4 cm (after it went into the octree) and
+  // finishes; returns the keyframes.
+  const auto run = [&](map::Map& map, DenseMapper& dense) {
+    std::vector<map::KeyFramePtr> keyframes;
+    for (int k = 0; k < n; ++k) {
+      auto kf = std::make_shared<map::KeyFrame>(
+          map.next_keyframe_id(), k, std::make_shared<map::FrameFeatures>(), pose(k, 0.0));
+      map.add_keyframe(kf);
+      keyframes.push_back(kf);
+      auto [bgr, depth, mask] = images(k);
+      dense.submit({kf, bgr, depth, mask});
+    }
+    keyframes[1]->set_T_c_w(pose(1, 0.04));
+    dense.finish();
+    return keyframes;
+  };
   auto map = std::make_shared<map::Map>();
   DenseMapperConfig config;
   config.inpainting.num_keyframes = 3;  // sources: the newest 3 + 2
   config.inpainting.extra_keyframes = 2;
   config.octree_delay_keyframes = 2;
   DenseMapper dense(config, camera, map);
-  std::vector<map::KeyFramePtr> keyframes;
-  for (int k = 0; k < n; ++k) {
-    auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
-                                              std::make_shared<map::FrameFeatures>(), pose(k, 0.0));
-    map->add_keyframe(kf);
-    keyframes.push_back(kf);
-    auto [bgr, depth, mask] = images(k);
-    dense.submit({kf, bgr, depth, mask});
-  }
-  // Keyframe 1 moves after it went in: the end of the run rebuilds from the compacted keyframes.
-  keyframes[1]->set_T_c_w(pose(1, 0.04));
-  dense.finish();
+  run(*map, dense);
+  // Keyframe 1 moved after it went in: the end of the run rebuilds from the compacted keyframes.
   EXPECT_EQ(dense.stats().octree_rebuilds, 1u);
   // One full keyframe: colour, depth, exclusion and the repaired mask (the unfilled one shares
   // the exclusion's buffer or adds one more byte per pixel).
@@ -221,17 +227,7 @@ TEST(DenseMapper, OldKeyframesKeepOnlyWhatARebuildNeeds) {
   no_repair.inpainting_enabled = false;
   DenseMapper compacted(no_repair, camera, map_b);
   octomap::OctreeMap reference(no_repair.octree, camera);
-  std::vector<map::KeyFramePtr> keyframes_b;
-  for (int k = 0; k < n; ++k) {
-    auto kf = std::make_shared<map::KeyFrame>(map_b->next_keyframe_id(), k,
-                                              std::make_shared<map::FrameFeatures>(), pose(k, 0.0));
-    map_b->add_keyframe(kf);
-    keyframes_b.push_back(kf);
-    auto [bgr, depth, mask] = images(k);
-    compacted.submit({kf, bgr, depth, mask});
-  }
-  keyframes_b[1]->set_T_c_w(pose(1, 0.04));
-  compacted.finish();
+  const std::vector<map::KeyFramePtr> keyframes_b = run(*map_b, compacted);
   EXPECT_EQ(compacted.stats().octree_rebuilds, 1u);
   EXPECT_LE(compacted.stats().peak_stored_image_bytes, (n + 1) * full / 16);
   const int band = 2 * no_repair.mask_border_px + 1;

@@ -243,17 +243,10 @@ namespace {
 /// key the file holds, its line ("run.yaml:7: configuration key 'tracking.orb.scale_factor':
 /// ..."). A key left at its default has no line.
 ConfigError located(const YamlFile& file, const ConfigError& error) {
-  const std::string message = error.what();
-  const std::string marker = "configuration key '";
-  int line = 0;
-  if (const auto pos = message.find(marker); pos != std::string::npos) {
-    const std::size_t begin = pos + marker.size();
-    if (const auto end = message.find('\'', begin); end != std::string::npos) {
-      line = file.line_of_path(message.substr(begin, end - begin));
-    }
-  }
-  return ConfigError(line > 0 ? fmt::format("{}:{}: {}", file.source(), line, message)
-                              : fmt::format("{}: {}", file.source(), message));
+  const std::string key = error.key();
+  const int line = key.empty() ? 0 : file.line_of_path(key);
+  return ConfigError(line > 0 ? fmt::format("{}:{}: {}", file.source(), line, error.what())
+                              : fmt::format("{}: {}", file.source(), error.what()));
 }
 
 pipeline::SystemConfig read_system_config(const YamlFile& file) {

@@ -32,6 +32,8 @@ class ConfigError : public Error {
   /// The same error with `prefix` put before the key it names ("optimizer.x" ->
   /// "loop.optimizer.x"), for a config struct validated inside an enclosing one.
   ConfigError with_key_prefix(const std::string& prefix) const;
+  /// The dotted key the message names ("tracking.orb.scale_factor"), empty when it names none.
+  std::string key() const;
 };
 
 /// Thrown by a pipeline that was asked to stop (Ctrl-C); outputs so far have been flushed.

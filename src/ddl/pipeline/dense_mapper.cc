@@ -177,26 +177,21 @@ void DenseMapper::process(DenseKeyframe item) {
                 cv::Mat(),     cv::Mat(), nullptr,      SE3()};
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
-  const bool repair = config_.inpainting_enabled && cv::countNonZero(mask) > 0;
-  const std::size_t n =
-      !repair ? 0
-              : std::min<std::size_t>(stored_.size(),
-                                      static_cast<std::size_t>(config_.inpainting.num_keyframes +
-                                                               config_.inpainting.extra_keyframes));
-  // The poses of the keyframe and its sources, in one reading: local BA and loop correction
-  // write poses under the map's update lock, and a repair from two world frames would stay in the
-  // stored images. A culled keyframe is at its parent-resolved pose, since its own froze when it
-  // was culled: for sources since 2026-11-26; for the keyframe itself since 2026-11-27 (culled
-  // while queued, it was repaired and integrated at the frozen pose, across a loop correction).
-  SE3 T_w_c;
-  std::vector<SE3> T_w_sources(n);
-  map_->read_consistent([&] {
-    T_w_c = tracking::resolved_T_w_c(item.keyframe);
-    for (std::size_t k = 0; k < n; ++k) {
-      T_w_sources[k] = tracking::resolved_T_w_c(stored_[stored_.size() - 1 - k].keyframe);
-    }
-  });
-  if (repair) {
+  if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
+    const std::size_t n = std::min(stored_.size(), source_window());
+    // The poses of the keyframe and its sources, in one reading: local BA and loop correction
+    // write poses under the map's update lock, and a repair from two world frames would stay in
+    // the stored images. A culled keyframe is at its parent-resolved pose, since its own froze
+    // when it was culled: for sources since 2026-11-26; for the keyframe itself since 2026-11-27
+    // (culled while queued, it was repaired at the frozen pose, across a loop correction).
+    SE3 T_w_c;
+    std::vector<SE3> T_w_sources(n);
+    map_->read_consistent([&] {
+      T_w_c = tracking::resolved_T_w_c(item.keyframe);
+      for (std::size_t k = 0; k < n; ++k) {
+        T_w_sources[k] = tracking::resolved_T_w_c(stored_[stored_.size() - 1 - k].keyframe);
+      }
+    });
     std::vector<inpainting::SourceView> sources;
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
@@ -269,11 +264,14 @@ void DenseMapper::process(DenseKeyframe item) {
   ++stats_.keyframes;
 }
 
+std::size_t DenseMapper::source_window() const {
+  return config_.inpainting_enabled ? static_cast<std::size_t>(config_.inpainting.num_keyframes +
+                                                               config_.inpainting.extra_keyframes)
+                                    : 0;
+}
+
 void DenseMapper::compact_old_keyframes() {
-  const std::size_t sources = config_.inpainting_enabled
-                                  ? static_cast<std::size_t>(config_.inpainting.num_keyframes +
-                                                             config_.inpainting.extra_keyframes)
-                                  : 0;
+  const std::size_t sources = source_window();
   const std::size_t old_end = stored_.size() > sources ? stored_.size() - sources : 0;
   for (std::size_t i = 0; i < old_end; ++i) {
     Stored& s = stored_[i];

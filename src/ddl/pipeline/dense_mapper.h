@@ -121,6 +121,8 @@ class DenseMapper {
   /// Keyframes older than the inpainting sources keep only what an octree rebuild needs (its
   /// pixel_stride's pixels of colour, depth and exclusion mask), or nothing without an octree.
   void compact_old_keyframes();
+  /// How many of the newest stored keyframes are inpainting sources (0 without inpainting).
+  std::size_t source_window() const;
   /// Whether a stored keyframe's pose moved since it went into the octree by more than a
   /// quarter voxel, at the octree's range (local BA refines poses without a big change).
   bool poses_moved_since_integration() const;
