@@ -138,6 +138,15 @@ TEST(PoseGraph, RejectsUnanchoredGraphAndBadEdges) {
   PoseGraphProblem unanchored = lp.problem;
   unanchored.vertices[0].fixed = false;
   EXPECT_THROW(optimize_pose_graph(unanchored, OptimizerConfig{}), Error);
+  // A fixed vertex without edges holds nothing: the free vertices' gauge stays free.
+  PoseGraphProblem fixed_apart = unanchored;
+  fixed_apart.vertices.push_back({SE3(), true});
+  try {
+    optimize_pose_graph(fixed_apart, OptimizerConfig{});
+    FAIL() << "expected ddl::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gauge"), std::string::npos) << e.what();
+  }
   PoseGraphProblem bad_index = lp.problem;
   bad_index.edges[2].j = 5;
   EXPECT_THROW(optimize_pose_graph(bad_index, OptimizerConfig{}), Error);

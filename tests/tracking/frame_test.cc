@@ -8,6 +8,7 @@
 #include "ddl/core/error.h"
 #include "ddl/map/map.h"
 #include "ddl/tracking/frame_matching.h"
+#include "ddl/tracking/keyframe_decision.h"
 #include "ddl/tracking/local_map.h"
 #include "ddl/tracking/pose_estimation.h"
 #include "tracking_test_support.h"
@@ -133,6 +134,128 @@ TEST(FrameTest, DropFeaturesInMaskKeepsTheRestConsistent) {
   EXPECT_NE(std::find(near.begin(), near.end(), frame.size() / 2), near.end());
   EXPECT_EQ(frame.drop_features_in(cv::Mat()), 0u);
   EXPECT_THROW(frame.drop_features_in(cv::Mat(10, 10, CV_8U)), Error);
+}
+
+// The mask the extractor checks and the depth and mask a frame reads afterwards are the same
+// pixel, also where a coarse level's keypoint lands on a half pixel of level 0 (level 1: rows
+// 6m + 2.5; cvRound took row 6m + 2 for the mask, the depth read row 6m + 3).
+TEST(FrameTest, ExtractionMaskAndDepthReadTheSamePixel) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  io::RgbdFrame input = room_sequence().frames[0];
+  input.depth_m = input.depth_m.clone();
+  cv::Mat mask(input.rgb.size(), CV_8U, cv::Scalar(0));
+  constexpr float kMaskedDepth = 0.77f;  // the room is 0.3 .. 4.5 m; no pixel of it is exactly this
+  for (int r = 3; r < mask.rows; r += 6) {
+    mask.row(r).setTo(255);
+    input.depth_m.row(r).setTo(kMaskedDepth);
+  }
+  Frame frame = builder.build(input, mask, 0);
+  ASSERT_GT(frame.size(), 500u);
+  int half_pixel_rows = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const float y = frame.features().keypoints[i].pt.y;
+    half_pixel_rows += std::fabs(y - std::floor(y) - 0.5f) < 1e-4f ? 1 : 0;
+    EXPECT_NE(frame.features().depth_m[i], kMaskedDepth) << "keypoint " << i << " at y " << y;
+  }
+  ASSERT_GT(half_pixel_rows, 2);  // the case is exercised
+  EXPECT_EQ(frame.drop_features_in(mask), 0u);
+}
+
+// A point local mapping culled since the last frame takes no slot in the motion-model search:
+// it neither displaces the good point matched to the same keypoint nor counts as a match.
+TEST(FrameMatcherTest, ACulledPointOfTheLastFrameNeitherTakesASlotNorCounts) {
+  auto geometry =
+      std::make_shared<FrameGeometry>(FrameGeometry::from(test_camera(), FrameConfig{}));
+  constexpr int kOthers = 12;
+  cv::RNG rng(1);
+  cv::Mat descriptors(kOthers + 1, 32, CV_8U);
+  rng.fill(descriptors, cv::RNG::UNIFORM, 0, 256);
+  auto features_of = [&](const std::vector<cv::Point2f>& points, const std::vector<float>& angles,
+                         const cv::Mat& rows) {
+    auto f = std::make_shared<map::FrameFeatures>();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      f->keypoints.emplace_back(points[i], 31.0f, angles[i], 50.0f, 0);
+    }
+    f->descriptors = rows.clone();
+    f->pyramid = features::make_scale_pyramid(8, 1.2);
+    f->depth_m.assign(points.size(), 0.0f);
+    f->u_right.assign(points.size(), -1.0f);
+    f->grid = features::FeatureGrid(f->keypoints,
+                                    cv::Rect2f(0.0f, 0.0f, static_cast<float>(geometry->width),
+                                               static_cast<float>(geometry->height)));
+    return f;
+  };
+  // Current frame: keypoint 0 at the centre, the others on a row, all at orientation 0.
+  std::vector<cv::Point2f> current_points{{320.0f, 240.0f}};
+  for (int k = 0; k < kOthers; ++k) current_points.emplace_back(60.0f + 40.0f * k, 100.0f);
+  // Last frame: the culled point (orientation 180) and a good one (0) on the centre keypoint.
+  std::vector<cv::Point2f> last_points{{320.0f, 240.0f}, {320.0f, 240.0f}};
+  std::vector<float> last_angles{180.0f, 0.0f};
+  cv::Mat last_rows(kOthers + 2, 32, CV_8U);
+  descriptors.row(0).copyTo(last_rows.row(0));
+  descriptors.row(0).copyTo(last_rows.row(1));
+  for (int k = 0; k < kOthers; ++k) {
+    last_points.push_back(current_points[static_cast<std::size_t>(k) + 1]);
+    last_angles.push_back(0.0f);
+    descriptors.row(k + 1).copyTo(last_rows.row(k + 2));
+  }
+  auto last_features = features_of(last_points, last_angles, last_rows);
+  Frame last(1, 0.0, last_features, geometry);
+  Frame current(
+      2, 0.033,
+      features_of(current_points, std::vector<float>(current_points.size(), 0.0f), descriptors),
+      geometry);
+  last.set_T_c_w(SE3());
+  current.set_T_c_w(SE3());
+  auto keyframe = std::make_shared<map::KeyFrame>(0, 0.0, last_features, SE3());
+  auto point_at = [&](std::size_t i, map::MapPointId id) {
+    const cv::Point2f& p = last_points[i];
+    const double z = 2.0;
+    const Vec3d p_w((p.x - geometry->cx) / geometry->fx * z,
+                    (p.y - geometry->cy) / geometry->fy * z, z);
+    auto point = std::make_shared<map::MapPoint>(id, p_w, keyframe);
+    point->add_observation(keyframe, i, true);
+    keyframe->set_map_point(i, point);
+    point->compute_distinctive_descriptor();
+    point->update_normal_and_depth();
+    last.set_map_point(i, point);
+    return point;
+  };
+  const map::MapPointPtr culled = point_at(0, 100);
+  const map::MapPointPtr good = point_at(1, 101);
+  for (int k = 0; k < kOthers; ++k) point_at(static_cast<std::size_t>(k) + 2, 200 + k);
+  culled->set_bad();
+
+  FrameMatcher matcher;
+  const int matches = matcher.match_last_frame(current, last, 15.0f);
+  EXPECT_EQ(matches, current.matched_count());
+  EXPECT_EQ(matches, kOthers + 1);
+  EXPECT_EQ(current.map_point(0), good);
+}
+
+// The close-point criterion's "established" points are those two keyframes observe; a point
+// that one keyframe created from depth is not, although its depth observation counts 2 (the
+// weighted count min_observations_for() asks of the reference keyframe's points in a map of
+// <= 2 keyframes).
+TEST(FrameTest, AClosePointOfOneKeyframeIsNotEstablished) {
+  const TrackerConfig config = testing::test_tracker_config();
+  FrameBuilder builder(test_camera(), config.orb, config.frame);
+  Frame frame = builder.build(room_sequence().frames[0], cv::Mat(), 0);
+  std::size_t close = frame.size();
+  for (std::size_t i = 0; i < frame.size() && close == frame.size(); ++i) {
+    if (frame.is_close(i)) close = i;
+  }
+  ASSERT_LT(close, frame.size());
+  auto first = std::make_shared<map::KeyFrame>(0, 0.0, frame.features_ptr(), SE3());
+  auto second = std::make_shared<map::KeyFrame>(1, 0.1, frame.features_ptr(), SE3());
+  auto point = std::make_shared<map::MapPoint>(7, frame.unproject_w(close), first);
+  point->add_observation(first, close, true);
+  frame.set_map_point(close, point);
+  EXPECT_EQ(count_close_points(frame).tracked, 1);
+  EXPECT_EQ(count_close_points(frame).tracked_established, 0);
+  point->add_observation(second, close, true);
+  EXPECT_EQ(count_close_points(frame).tracked_established, 1);
 }
 
 TEST(FrameTest, RejectsImagesOfTheWrongTypeOrSize) {

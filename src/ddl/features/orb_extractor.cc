@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/pixel.h"
 #include "ddl/features/quadtree_distribution.h"
 
 namespace ddl::features {
@@ -286,8 +287,10 @@ void OrbExtractor::process_level(int level, const cv::Mat& ignore_mask) {
   auto keep = [&](const cv::KeyPoint& kp) {
     if (kp.response < strong && cell_has_strong[cell_of(kp.pt)]) return false;
     if (use_mask) {
-      const int x0 = std::clamp(cvRound((kp.pt.x + 0.5f) * sx - 0.5f), 0, ignore_mask.cols - 1);
-      const int y0 = std::clamp(cvRound((kp.pt.y + 0.5f) * sy - 0.5f), 0, ignore_mask.rows - 1);
+      const int x0 =
+          std::clamp(nearest_pixel((kp.pt.x + 0.5f) * sx - 0.5f), 0, ignore_mask.cols - 1);
+      const int y0 =
+          std::clamp(nearest_pixel((kp.pt.y + 0.5f) * sy - 0.5f), 0, ignore_mask.rows - 1);
       if (ignore_mask.at<std::uint8_t>(y0, x0) != 0) return false;
     }
     return true;

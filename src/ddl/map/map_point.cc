@@ -81,6 +81,11 @@ int MapPoint::num_observations() const {
   return num_obs_;
 }
 
+std::size_t MapPoint::num_keyframes() const {
+  std::lock_guard lock(mutex_);
+  return observations_.size();
+}
+
 std::shared_ptr<KeyFrame> MapPoint::reference_keyframe() const {
   std::lock_guard lock(mutex_);
   return reference_keyframe_.lock();

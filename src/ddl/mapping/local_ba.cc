@@ -1,5 +1,6 @@
 #include "ddl/mapping/local_ba.h"
 
+#include <algorithm>
 #include <map>
 #include <vector>
 
@@ -83,7 +84,9 @@ LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, m
     }
     ++pi;
   }
-  stats.free_keyframes = local.size();
+  stats.free_keyframes = static_cast<std::size_t>(
+      std::count_if(problem.keyframes.begin(), problem.keyframes.end(),
+                    [](const optimization::BaKeyframe& kf) { return !kf.fixed; }));
   stats.fixed_keyframes = fixed.size();
   stats.points = point_list.size();
   stats.observations = problem.observations.size();
@@ -98,6 +101,10 @@ LocalBaStatistics run_local_bundle_adjustment(const map::KeyFramePtr& current, m
   stats.iterations = result.iterations;
   stats.initial_cost = result.initial_cost;
   stats.final_cost = result.final_cost;
+  // Aborted before its first iteration (a keyframe arrived while the problem was built), or
+  // failed: the map is left as it was, as ORB-SLAM2 does when its stop flag is up before
+  // optimizing.
+  if ((result.aborted && result.iterations == 0) || result.failed) return stats;
 
   map.apply_update([&] {
     for (const std::size_t i : result.outliers) {

@@ -104,10 +104,6 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
   result.points_w = problem.points_w;
   if (num_obs == 0) return result;
 
-  auto is_fixed = [&](std::size_t k) {
-    return problem.keyframes[k].fixed || (fix_first_keyframe && k == 0);
-  };
-
   std::vector<PoseParameters> poses(num_kf);
   for (std::size_t k = 0; k < num_kf; ++k) poses[k] = to_parameters(problem.keyframes[k].T_c_w);
   std::vector<Vec3d> points = problem.points_w;
@@ -117,6 +113,13 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
     kf_used[obs.keyframe] = 1;
     ++point_active_count[obs.point];
   }
+  // The gauge: the first keyframe that takes part (keyframes[0] unless it observes nothing, when
+  // holding it would leave the problem's gauge free).
+  const std::size_t gauge = static_cast<std::size_t>(
+      std::find(kf_used.begin(), kf_used.end(), std::uint8_t{1}) - kf_used.begin());
+  auto is_fixed = [&](std::size_t k) {
+    return problem.keyframes[k].fixed || (fix_first_keyframe && k == gauge);
+  };
 
   std::vector<std::uint8_t> active(num_obs, 1);
   bool robust = true;
@@ -180,11 +183,12 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &ceres_problem, &summary);
+  result.failed = !detail::solution_usable(summary, "bundle adjustment");
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
   result.iterations = detail::iterations_run(summary);
 
-  if (!callback.aborted() && schedule.remove_outliers) {
+  if (!callback.aborted() && !result.failed && schedule.remove_outliers) {
     for (std::size_t i = 0; i < num_obs; ++i) {
       if (!is_outlier(i)) continue;
       active[i] = 0;
@@ -200,13 +204,18 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
     if (schedule.refine_iterations > 0) {
       options.max_num_iterations = schedule.refine_iterations;
       ceres::Solve(options, &ceres_problem, &summary);
+      result.failed = !detail::solution_usable(summary, "bundle adjustment (refinement)");
       result.final_cost = summary.final_cost;
       result.iterations += detail::iterations_run(summary);
     }
   }
   result.aborted = callback.aborted();
 
-  for (std::size_t i = 0; i < num_obs; ++i) {
+  // Aborted before its first iteration, or failed, the solve judged nothing: chi2 at the input
+  // estimate is no outlier test (ORB-SLAM2's local BA returns untouched when its stop flag is up
+  // before optimizing).
+  const bool judged = !(result.aborted && result.iterations == 0) && !result.failed;
+  for (std::size_t i = 0; judged && i < num_obs; ++i) {
     if (is_outlier(i)) result.outliers.push_back(i);
   }
   for (std::size_t k = 0; k < num_kf; ++k) {

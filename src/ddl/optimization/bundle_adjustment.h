@@ -51,15 +51,17 @@ struct BundleAdjustmentResult {
   /// caller erases these keyframe-point associations from the map (ORB-SLAM2's vToErase).
   std::vector<std::size_t> outliers;
   bool aborted = false;       ///< the abort flag stopped the optimisation
+  bool failed = false;        ///< Ceres returned no usable solution (logged; no outliers given)
   int iterations = 0;         ///< LM iterations over all phases
   double initial_cost = 0.0;  ///< Ceres cost (0.5 sum of robustified chi2) before the first phase
   double final_cost = 0.0;    ///< Ceres cost after the last phase that ran
   std::string linear_solver;  ///< the Ceres linear solver used, for logs
 };
 
-/// Runs `schedule` on `problem`; keyframes with fixed=true (and keyframes[0] when
-/// fix_first_keyframe) are held constant. Throws ddl::Error naming the observation when an index
-/// is out of range or a value is unusable, ddl::ConfigError when camera or config are invalid.
+/// Runs `schedule` on `problem`; keyframes with fixed=true (and, when fix_first_keyframe, the
+/// first keyframe with observations: keyframes[0] unless it has none) are held constant. Throws
+/// ddl::Error naming the observation when an index is out of range or a value is unusable,
+/// ddl::ConfigError when camera or config are invalid.
 BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
                                          const BundleAdjustmentSchedule& schedule,
                                          bool fix_first_keyframe, const OptimizerConfig& config,

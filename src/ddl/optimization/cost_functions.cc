@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ddl::optimization {
 namespace {
@@ -156,6 +157,8 @@ double reprojection_chi2(const CameraIntrinsics& camera, const SE3& T_c_w, const
                          const Measurement& measurement, double* depth_m) {
   const Vec3d p_c = T_c_w * p_w;
   if (depth_m != nullptr) *depth_m = p_c.z();
+  // On the camera plane the residual is not defined (the cost functions return zero there).
+  if (std::abs(p_c.z()) < kMinAbsDepth) return std::numeric_limits<double>::infinity();
   if (measurement.stereo) {
     Eigen::Matrix<double, 3, 1> r;
     ReprojectionModel<3>(camera, measurement).evaluate(p_c, &r, nullptr);

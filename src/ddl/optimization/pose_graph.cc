@@ -71,6 +71,7 @@ PoseGraphResult optimize_pose_graph(const PoseGraphProblem& problem, const Optim
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem ceres_problem(problem_options);
   int free_vertices = 0;
+  bool gauge_held = false;  // a fixed vertex takes part in some edge
   for (std::size_t e = 0; e < problem.edges.size(); ++e) {
     const PoseGraphEdge& edge = problem.edges[e];
     if (problem.vertices[edge.i].fixed && problem.vertices[edge.j].fixed) continue;
@@ -79,6 +80,7 @@ PoseGraphResult optimize_pose_graph(const PoseGraphProblem& problem, const Optim
       ceres_problem.AddParameterBlock(poses[v].data(), kPoseAmbientSize, &manifold);
       if (problem.vertices[v].fixed) {
         ceres_problem.SetParameterBlockConstant(poses[v].data());
+        gauge_held = true;
       } else {
         ++free_vertices;
       }
@@ -87,6 +89,11 @@ PoseGraphResult optimize_pose_graph(const PoseGraphProblem& problem, const Optim
                                    poses[edge.i].data(), poses[edge.j].data());
   }
   if (free_vertices == 0) return result;
+  if (!gauge_held) {
+    throw Error(
+        "pose graph: no fixed vertex has an edge to a free one, so the gauge is free (fix a "
+        "vertex of the graph, e.g. the loop keyframe)");
+  }
 
   ceres::Solver::Options options =
       detail::base_options(config.num_threads, config.pose_graph_iterations);
@@ -101,6 +108,7 @@ PoseGraphResult optimize_pose_graph(const PoseGraphProblem& problem, const Optim
   options.callbacks.push_back(&callback);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &ceres_problem, &summary);
+  detail::solution_usable(summary, "pose graph");
   result.aborted = callback.aborted();
   result.iterations = detail::iterations_run(summary);
   result.initial_cost = summary.initial_cost;

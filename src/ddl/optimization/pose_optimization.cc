@@ -73,6 +73,7 @@ PoseOptimizationResult optimize_pose(const CameraIntrinsics& camera, const SE3& 
     robust = round < config.pose_robust_rounds;
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
+    detail::solution_usable(summary, "pose optimisation");
     result.iterations += detail::iterations_run(summary);
 
     const SE3 T_c_w = from_parameters(x.data());

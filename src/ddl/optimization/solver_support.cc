@@ -1,6 +1,7 @@
 #include "ddl/optimization/solver_support.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
@@ -61,6 +62,13 @@ std::optional<ceres::SparseLinearAlgebraLibraryType> best_sparse_library() {
 
 int iterations_run(const ceres::Solver::Summary& summary) {
   return summary.iterations.empty() ? 0 : static_cast<int>(summary.iterations.size()) - 1;
+}
+
+bool solution_usable(const ceres::Solver::Summary& summary, const char* what) {
+  if (summary.IsSolutionUsable()) return true;
+  spdlog::warn("{}: Ceres failed ({}): {}", what,
+               ceres::TerminationTypeToString(summary.termination_type), summary.message);
+  return false;
 }
 
 ceres::Solver::Options base_options(int num_threads, int max_iterations) {

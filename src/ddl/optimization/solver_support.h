@@ -51,6 +51,9 @@ void check_measurement(const CameraIntrinsics& camera, const Measurement& m, con
 
 /// Iterations a solve ran (Ceres records iteration 0, the initial evaluation, as well).
 int iterations_run(const ceres::Solver::Summary& summary);
+/// Whether Ceres left a usable solution (not FAILURE / USER_FAILURE); logs a warning with
+/// Ceres' message, naming `what`, when it did not.
+bool solution_usable(const ceres::Solver::Summary& summary, const char* what);
 
 /// Options every problem shares: silent, given thread count, at most max_iterations iterations.
 ceres::Solver::Options base_options(int num_threads, int max_iterations);

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/pixel.h"
 
 namespace ddl::tracking {
 
@@ -86,8 +87,8 @@ std::size_t Frame::drop_features_in(const cv::Mat& mask) {
   keep.reserve(f.size());
   for (std::size_t i = 0; i < f.size(); ++i) {
     const cv::Point2f& pt = f.keypoints[i].pt;
-    const int x = std::clamp(static_cast<int>(std::lround(pt.x)), 0, mask.cols - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(pt.y)), 0, mask.rows - 1);
+    const int x = std::clamp(nearest_pixel(pt.x), 0, mask.cols - 1);
+    const int y = std::clamp(nearest_pixel(pt.y), 0, mask.rows - 1);
     if (mask.at<std::uint8_t>(y, x) == 0) keep.push_back(i);
   }
   const std::size_t removed = f.size() - keep.size();
@@ -123,8 +124,8 @@ void Frame::compute_bow(const vocabulary::Vocabulary& vocabulary, int levels_up)
 
 float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeometry& geometry) {
   // Pixel (0, 0) is centred on the top-left pixel, so the nearest pixel is the rounded position.
-  const int x = static_cast<int>(std::lround(u));
-  const int y = static_cast<int>(std::lround(v));
+  const int x = nearest_pixel(u);
+  const int y = nearest_pixel(v);
   if (x < 0 || y < 0 || x >= depth_m.cols || y >= depth_m.rows) return 0.0f;
   const float d = depth_m.at<float>(y, x);
   if (!std::isfinite(d) || d <= geometry.min_depth_m || d > geometry.max_depth_m) return 0.0f;

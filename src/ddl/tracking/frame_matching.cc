@@ -73,10 +73,11 @@ int FrameMatcher::match_last_frame(Frame& current, const Frame& last, float radi
   const bool forward = t_last_current.z() > g.baseline_m;
   const bool backward = -t_last_current.z() > g.baseline_m;
 
+  filled_.assign(current.size(), 0);
   int matches = 0;
   for (std::size_t i = 0; i < last.size(); ++i) {
     const map::MapPointPtr& point = last.map_point(i);
-    if (!point || last.is_outlier(i)) continue;
+    if (!point || last.is_outlier(i) || point->is_bad()) continue;
     const Vec3d p_c = current.T_c_w() * point->position_w();
     if (p_c.z() <= 0.0) continue;
     const Vec2d uv = g.project(p_c);
@@ -105,7 +106,7 @@ int FrameMatcher::match_last_frame(Frame& current, const Frame& last, float radi
     int best_distance = kNoMatch;
     std::size_t best_index = 0;
     for (std::size_t j : candidates_) {
-      if (slot_taken(current, j)) continue;
+      if (filled_[j] != 0 || slot_taken(current, j)) continue;
       if (cur.u_right[j] > 0.0f && std::fabs(u_right - cur.u_right[j]) > radius) continue;
       const int distance = features::hamming_distance(d_point, descriptor_row(cur.descriptors, j));
       if (distance < best_distance) {
@@ -114,6 +115,7 @@ int FrameMatcher::match_last_frame(Frame& current, const Frame& last, float radi
       }
     }
     if (best_distance <= features::kThHigh) {
+      filled_[best_index] = 1;
       current.set_map_point(best_index, point);
       current.set_outlier(best_index, false);
       histogram_.add(prev.keypoints[i].angle, cur.keypoints[best_index].angle,

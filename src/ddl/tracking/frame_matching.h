@@ -11,6 +11,7 @@
 // thread. Results depend only on the inputs (deterministic).
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "ddl/features/matcher.h"
@@ -47,8 +48,10 @@ class FrameMatcher {
   /// projected into `current` (pose = prediction); the search window is radius_px scaled by the
   /// keypoint's level, restricted to finer / coarser levels when the camera moved forward /
   /// backward by more than the baseline. Best match within TH_HIGH, then rotation consistency.
-  /// Fills current's empty slots (or slots holding points without observations). Returns the
-  /// number of matches.
+  /// Fills current's empty slots (or slots holding points without observations, unless this
+  /// search filled them). Points of `last` that local mapping culled meanwhile are skipped
+  /// (ORB-SLAM2 keeps a culled point's observation count, so its slot stays protected there).
+  /// Returns the number of matches, each in its own slot.
   int match_last_frame(Frame& current, const Frame& last, float radius_px);
 
   /// ORB-SLAM2 SearchByProjection(Frame, vector<MapPoint*>): matches the projected local points
@@ -80,6 +83,9 @@ class FrameMatcher {
 
   std::vector<std::size_t> candidates_;
   features::RotationHistogram histogram_;
+  // Slots filled by the running match_last_frame: taken even if their point went bad meanwhile,
+  // so that every histogram entry still names the point in its slot.
+  std::vector<std::uint8_t> filled_;
 };
 
 }  // namespace ddl::tracking

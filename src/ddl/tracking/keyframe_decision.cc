@@ -2,14 +2,14 @@
 
 namespace ddl::tracking {
 
-CloseCounts count_close_points(const Frame& frame, int min_observations) {
+CloseCounts count_close_points(const Frame& frame) {
   CloseCounts counts;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (!frame.is_close(i)) continue;
     const map::MapPointPtr& point = frame.map_point(i);
     if (point && !frame.is_outlier(i)) {
       ++counts.tracked;
-      if (point->num_observations() >= min_observations) ++counts.tracked_established;
+      if (point->num_keyframes() >= 2) ++counts.tracked_established;
     } else {
       ++counts.non_tracked;
     }

@@ -17,12 +17,14 @@ namespace ddl::tracking {
 struct CloseCounts {
   int tracked = 0;              // close features matched to a map point (not outliers)
   int non_tracked = 0;          // close features without a map point (candidates for new points)
-  int tracked_established = 0;  // tracked ones whose point has >= min_observations (seen by
-                                // two keyframes, not only created from depth by the last one)
+  int tracked_established = 0;  // tracked ones whose point >= 2 keyframes observe (not only
+                                // created from depth by the last one)
 };
 
-/// `min_observations`: see min_observations_for().
-CloseCounts count_close_points(const Frame& frame, int min_observations);
+/// Counts the close features of a tracked frame. "Established" counts keyframes, not the
+/// weighted observations of min_observations_for(): with <= 2 keyframes in the map that asks for
+/// 2, which a point created from depth by a single keyframe already has.
+CloseCounts count_close_points(const Frame& frame);
 
 /// Everything the decision depends on, gathered by the Tracker.
 struct KeyFrameContext {

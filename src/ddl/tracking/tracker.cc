@@ -120,6 +120,7 @@ std::size_t Tracker::exclude_features(Frame& frame, const cv::Mat& mask) {
     if (!prepared_.initial_pose_ok) {
       // Too little left: track() estimates the initial pose again with all its fallbacks.
       frame.clear_map_points();
+      frame.clear_rejected_points();  // rejected against the discarded pose
       prepared_.initial_pose_done = false;
     }
   }
@@ -188,6 +189,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     // frame it was predicted from, are in the old world frame. Estimate it again, as ORB-SLAM2
     // does under one map-update lock from the initial pose to the local map (found by review).
     frame.clear_map_points();
+    frame.clear_rejected_points();  // rejected against the discarded pose
     prepared_.initial_pose_done = false;
   }
   if (prepared_.initial_pose_done) {
@@ -389,7 +391,7 @@ void Tracker::maybe_create_keyframe(Frame& frame, const MappingStatus& mapping,
   const int min_observations = min_observations_for(context.keyframes_in_map);
   context.reference_tracked_points = reference_keyframe_->tracked_map_points(min_observations);
   context.inliers = local_map_inliers_;
-  context.close = count_close_points(frame, min_observations);
+  context.close = count_close_points(frame);
   context.mapping = mapping;
   const bool insert = need_new_keyframe(config_.keyframes, context);
   spdlog::debug(
