@@ -7,6 +7,8 @@
 
 #include <algorithm>
 
+#include "ddl/features/orb_extractor.h"
+#include "ddl/mapping/keyframe_geometry.h"
 #include "ddl/mapping/keyframe_matching.h"
 #include "synthetic_world.h"
 
@@ -24,6 +26,23 @@ TEST(TriangulateLinear, RecoversExactPoint) {
   const auto p = triangulate_linear(T1, T2, c1.head<2>() / c1.z(), c2.head<2>() / c2.z());
   ASSERT_TRUE(p.has_value());
   EXPECT_LT((*p - p_w).norm(), 1e-9);
+}
+
+// A close point near the left border, u < bf / z, has a negative virtual right coordinate; as in
+// ORB-SLAM2 it enters the optimisers without its depth row (the 3-dof residual there was measured
+// worse, docs/optimization.md). A point right of it keeps the row.
+TEST(MeasurementOf, AClosePointNearTheLeftBorderEntersWithoutItsDepthRow) {
+  map::FrameFeatures f;
+  f.keypoints = {cv::KeyPoint(20.0f, 100.0f, 31.0f, -1.0f, 0.0f, 0),
+                 cv::KeyPoint(300.0f, 100.0f, 31.0f, -1.0f, 0.0f, 0)};
+  f.pyramid = features::make_scale_pyramid(8, 1.2);
+  f.depth_m = {1.0f, 2.0f};
+  f.u_right = {20.0f - 40.0f, 300.0f - 20.0f};  // bf = 40
+  EXPECT_FALSE(has_stereo(f, 0));
+  EXPECT_FALSE(measurement_of(f, 0).stereo);
+  const optimization::Measurement inside = measurement_of(f, 1);
+  EXPECT_TRUE(inside.stereo);
+  EXPECT_EQ(inside.u_right_px, 280.0);
 }
 
 struct TwoKeyframes {
