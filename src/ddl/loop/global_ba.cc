@@ -53,6 +53,7 @@ GlobalBaResult run_global_bundle_adjustment(const map::Map& map,
   const optimization::BundleAdjustmentResult result =
       optimization::global_bundle_adjustment(problem, config, control);
   out.aborted = result.aborted;
+  out.failed = result.failed;
   out.iterations = result.iterations;
   out.initial_cost = result.initial_cost;
   out.final_cost = result.final_cost;

@@ -28,6 +28,7 @@ struct GlobalBaResult {
   double initial_cost = 0.0;
   double final_cost = 0.0;
   bool aborted = false;  ///< the abort flag stopped it: do not merge
+  bool failed = false;   ///< Ceres returned no usable solution: nothing to merge
 };
 
 GlobalBaResult run_global_bundle_adjustment(const map::Map& map,

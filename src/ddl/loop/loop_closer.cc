@@ -254,6 +254,10 @@ bool LoopCloser::run_and_merge_global_ba(const std::atomic<bool>* abort) {
     spdlog::info("global BA aborted");
     return false;
   }
+  if (result.failed) {
+    spdlog::warn("global BA failed (Ceres); its result is not merged");
+    return false;
+  }
   std::size_t updated = 0;
   {
     PauseScope paused(pause_);

@@ -211,9 +211,10 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
   }
   result.aborted = callback.aborted();
 
-  // Aborted before its first iteration, or failed, the solve judged nothing: chi2 at the input
-  // estimate is no outlier test (ORB-SLAM2's local BA returns untouched when its stop flag is up
-  // before optimizing).
+  // Aborted before its first iteration, the solve judged nothing: chi2 at the input estimate is
+  // no outlier test (ORB-SLAM2's local BA returns untouched when its stop flag is up before
+  // optimizing). A failed solve (either phase) gives no outliers either: its caller keeps the
+  // map as it was, the first phase's estimate included.
   const bool judged = !(result.aborted && result.iterations == 0) && !result.failed;
   for (std::size_t i = 0; judged && i < num_obs; ++i) {
     if (is_outlier(i)) result.outliers.push_back(i);
