@@ -24,6 +24,11 @@ struct FrameFeatures {
 
   std::size_t size() const { return keypoints.size(); }
   bool has_depth(std::size_t i) const { return depth_m[i] > 0.0f; }
+  /// Whether feature i enters the optimisers with its depth row (u, v, u_right): ORB-SLAM2's
+  /// u_right >= 0, so a close point left of u = bf / depth has its 2-dof residual only (the
+  /// depth row there was measured worse, docs/optimization.md). The one rule for tracking and
+  /// mapping.
+  bool is_stereo(std::size_t i) const { return !u_right.empty() && u_right[i] >= 0.0f; }
   bool has_bow() const { return !bow.empty(); }
 };
 

@@ -24,11 +24,10 @@ inline Vec2d project(const CameraIntrinsics& camera, const Vec3d& p_c) {
   return {camera.fx * p_c.x() / p_c.z() + camera.cx, camera.fy * p_c.y() / p_c.z() + camera.cy};
 }
 
-/// True when feature i has a depth measurement with a non-negative virtual right coordinate
-/// (ORB-SLAM2's rule: a close point left of u = bf / z keeps its 2-dof residual only; taking
-/// every depth measurement was measured worse, docs/optimization.md).
+/// FrameFeatures::is_stereo: feature i has a depth measurement with a non-negative virtual right
+/// coordinate (ORB-SLAM2's rule).
 inline bool has_stereo(const map::FrameFeatures& features, std::size_t i) {
-  return !features.u_right.empty() && features.u_right[i] >= 0.0f;
+  return features.is_stereo(i);
 }
 
 /// The measurement of feature i for the optimisers: (u, v) and, with depth, u_right; information

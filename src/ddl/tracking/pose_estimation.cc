@@ -26,7 +26,7 @@ int FramePoseEstimator::optimize(Frame& frame) {
     optimization::PoseObservation obs;
     obs.p_w = point->position_w();
     obs.measurement.uv_px = Vec2d(kp.pt.x, kp.pt.y);
-    obs.measurement.stereo = f.u_right[i] >= 0.0f;  // as mapping::has_stereo
+    obs.measurement.stereo = f.is_stereo(i);
     obs.measurement.u_right_px = obs.measurement.stereo ? f.u_right[i] : 0.0;
     obs.measurement.inv_sigma2 = f.pyramid.inv_level_sigma2[static_cast<std::size_t>(kp.octave)];
     observations_.push_back(obs);
