@@ -29,6 +29,7 @@ HEADERS = [
     ("src/ddl/dynamics/geometry_check.h", "dynamics", ["GeometryCheckConfig"]),
     ("src/ddl/dynamics/dynamic_memory.h", "dynamics", ["DynamicMemoryConfig"]),
     ("src/ddl/dynamics/mask_depth_trim.h", "dynamics", ["DepthTrimConfig"]),
+    ("src/ddl/dynamics/picture_veto.h", "dynamics", ["PictureVetoConfig"]),
     ("src/ddl/inpainting/background_inpainter.h", "inpainting", ["InpaintingConfig"]),
     ("src/ddl/octomap/octree_map.h", "octomap", ["OctreeConfig"]),
     ("src/ddl/pipeline/dense_mapper.h", "pipeline", ["DenseMapperConfig"]),

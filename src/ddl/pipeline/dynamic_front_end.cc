@@ -8,6 +8,7 @@
 #include "ddl/core/timing.h"
 #include "ddl/dynamics/mask_depth_trim.h"
 #include "ddl/dynamics/mask_fusion.h"
+#include "ddl/dynamics/picture_veto.h"
 #include "ddl/segmentation/upright.h"
 
 namespace ddl::pipeline {
@@ -29,6 +30,7 @@ void DynamicConfig::validate() const {
   if (enabled && use_geometry) geometry.validate();
   if (enabled && use_segmentation) memory.validate();
   if (enabled && use_segmentation && depth_trim.enabled) depth_trim.validate();
+  if (enabled && use_segmentation && picture_veto.enabled) picture_veto.validate();
 }
 
 DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::PinholeCamera& camera,
@@ -101,6 +103,12 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
     }
     if (folder && stored_mask_mapping_) mask = stored_mask_mapping_(mask);
     out.mask = trimmed(mask);
+    // Pictures are judged on the network's own masks only: a reused mask was judged when made.
+    if (config_.picture_veto.enabled && !frame.depth_m.empty()) {
+      dynamics::PictureVetoStats veto;
+      out.mask = dynamics::drop_pictures(out.mask, frame.depth_m, config_.picture_veto, &veto);
+      out.pictures_dropped = veto.dropped;
+    }
     last_cnn_mask_ = out.mask.clone();
     last_cnn_index_ = frame.index;
   }

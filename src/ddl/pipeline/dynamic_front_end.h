@@ -32,6 +32,7 @@ struct CnnMask {
   double elapsed_ms = 0.0;  // inference and post-processing
   bool reused = false;      // the last CNN mask grown (dynamic.segmentation_interval), no inference
   bool turned = false;      // the frame was turned upright for the CNN (segmentation.upright)
+  int pictures_dropped = 0;  // regions dropped as pictures (dynamic.picture_veto)
 };
 
 struct DynamicMasks {

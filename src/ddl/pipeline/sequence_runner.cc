@@ -54,6 +54,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"geometry_checks_implausible", s.geometry_checks_implausible},
           {"geometry_checks_skipped", s.geometry_checks_skipped},
           {"segmentations_turned", s.segmentations_turned},
+          {"cnn_pictures_dropped", s.cnn_pictures_dropped},
           {"dense",
            {{"keyframes", s.dense.keyframes},
             {"masked_pixels", s.dense.masked_pixels},

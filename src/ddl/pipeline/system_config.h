@@ -9,6 +9,7 @@
 #include "ddl/dynamics/dynamic_memory.h"
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/dynamics/mask_depth_trim.h"
+#include "ddl/dynamics/picture_veto.h"
 #include "ddl/loop/loop_closer.h"
 #include "ddl/mapping/local_mapper.h"
 #include "ddl/pipeline/dense_mapper.h"
@@ -37,7 +38,8 @@ struct DynamicConfig {
   int segmentation_reuse_dilation_px = 8;  // growth of a reused CNN mask (people move meanwhile)
   std::size_t keyframe_depth_cache = 30;   // keyframe depth images kept for the geometry check
   segmentation::SegmenterConfig segmentation;
-  dynamics::DepthTrimConfig depth_trim;  // CNN masks cut to their region's depth (spill)
+  dynamics::DepthTrimConfig depth_trim;      // CNN masks cut to their region's depth (spill)
+  dynamics::PictureVetoConfig picture_veto;  // CNN regions standing in front of nothing dropped
   dynamics::GeometryCheckConfig geometry;
   dynamics::DynamicMemoryConfig memory;  // CNN detections of recent frames, re-projected
 
