@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "config_error_check.h"
 
@@ -81,20 +82,96 @@ TEST(PictureVeto, ARegionWithoutDepthIsKeptAndNothingMaskedGivesNothing) {
   EXPECT_EQ(stats.regions, 0);
 }
 
+TEST(PictureVeto, ADepthStepWithoutDropoutsStopsTheFloodToo) {
+  // The box beside the poster again, now without dropouts between it and the wall: the flood
+  // stops at the step by the continuity test alone.
+  Room room;
+  room.depth_m(cv::Rect(room.poster.br().x + 5, room.poster.y, 80, 200)).setTo(2.2f);
+  room.mask(room.poster).setTo(255);
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, PictureVetoConfig{})), 0);
+}
+
+TEST(PictureVeto, TwoRegionsInsideOneCloseBodyAreBothKept) {
+  // The second region lies inside the first one's flood: each region floods on its own.
+  Room room;
+  room.stand(room.body, 1.0f);
+  const cv::Rect head(room.body.x + 30, room.body.y + 40, 60, 20);
+  const cv::Rect hand(room.body.x + 35, room.body.y + 64, 10, 10);
+  room.mask(head).setTo(255);
+  room.mask(hand).setTo(255);
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, PictureVetoConfig{})),
+            head.area() + hand.area());
+}
+
+TEST(PictureVeto, ReachAndTheContourCountDecide) {
+  Room room;
+  room.stand(room.body, 1.0f);
+  // The torso mask starts 30 px inside the body, whose contour pixels (the first valid ring
+  // inside its 2 px dropout band) lie 28 steps from it.
+  const cv::Rect torso(room.body.x + 30, room.body.y + 60, 60, 80);
+  room.mask(torso).setTo(255);
+  PictureVetoConfig config;
+  config.reach_px = 27;
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, config)), 0);
+  config.reach_px = 28;
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, config)), torso.area());
+  config.min_near_pixels = 1000000;
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, config)), 0);
+}
+
+TEST(PictureVeto, APersonInFrontOfBackgroundOutOfRangeIsKept) {
+  // Nothing behind the person is within the sensor's range: the hole beside the body counts as
+  // farther. A dropout band 2 px wide (the body's own) does not.
+  Room room;
+  room.depth_m.setTo(0.0f);
+  room.stand(room.body, 2.0f);
+  room.mask(room.body).setTo(255);
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, PictureVetoConfig{})),
+            room.body.area());
+}
+
+TEST(PictureVeto, RegionsOfInterestAreReadInPlace) {
+  Room room;
+  room.mask(room.poster).setTo(255);
+  room.mask(room.body).setTo(255);
+  const cv::Rect inner(10, 10, 640, 480);
+  cv::Mat mask(500, 700, CV_8UC1, cv::Scalar(255));
+  cv::Mat depth(500, 700, CV_32FC1, cv::Scalar(0.0f));
+  room.mask.copyTo(mask(inner));
+  room.depth_m.copyTo(depth(inner));
+  EXPECT_EQ(cv::countNonZero(drop_pictures(mask(inner), depth(inner), PictureVetoConfig{})),
+            room.body.area());
+}
+
+TEST(PictureVeto, AFloodBudgetKeepsTheRegionsItCannotJudge) {
+  Room room;
+  room.mask(room.poster).setTo(255);
+  PictureVetoConfig config;
+  config.max_flood_pixels = 0;
+  PictureVetoStats stats;
+  EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, config, &stats)),
+            room.poster.area());
+  EXPECT_EQ(stats.unjudged, 1);
+  EXPECT_EQ(stats.dropped, 0);
+}
+
 TEST(PictureVeto, ConfigErrorsNameTheKey) {
   EXPECT_NO_THROW(PictureVetoConfig{}.validate());
-  PictureVetoConfig config;
-  config.reach_px = -1;
-  EXPECT_TRUE(test_support::throws_config_error_naming([&] { config.validate(); },
-                                                       "dynamic.picture_veto.reach_px"));
-  config = {};
-  config.continuity_m = 0.0;
-  EXPECT_TRUE(test_support::throws_config_error_naming([&] { config.validate(); },
-                                                       "dynamic.picture_veto.continuity_m"));
-  config = {};
-  config.min_near_pixels = 0;
-  EXPECT_TRUE(test_support::throws_config_error_naming([&] { config.validate(); },
-                                                       "dynamic.picture_veto.min_near_pixels"));
+  const auto rejects = [](const char* key, auto&& edit) {
+    PictureVetoConfig config;
+    edit(config);
+    return test_support::throws_config_error_naming([&] { config.validate(); },
+                                                    std::string("dynamic.picture_veto.") + key);
+  };
+  EXPECT_TRUE(rejects("reach_px", [](auto& c) { c.reach_px = -1; }));
+  EXPECT_TRUE(rejects("continuity_m", [](auto& c) { c.continuity_m = 0.0; }));
+  EXPECT_TRUE(rejects("continuity_quadratic", [](auto& c) { c.continuity_quadratic = -0.1; }));
+  EXPECT_TRUE(rejects("contour_window_px", [](auto& c) { c.contour_window_px = 0; }));
+  EXPECT_TRUE(rejects("contour_m", [](auto& c) { c.contour_m = 0.0; }));
+  EXPECT_TRUE(rejects("contour_quadratic", [](auto& c) { c.contour_quadratic = -0.1; }));
+  EXPECT_TRUE(rejects("hole_px", [](auto& c) { c.hole_px = 0; }));
+  EXPECT_TRUE(rejects("min_near_pixels", [](auto& c) { c.min_near_pixels = 0; }));
+  EXPECT_TRUE(rejects("max_flood_pixels", [](auto& c) { c.max_flood_pixels = -1; }));
 }
 
 }  // namespace

@@ -81,6 +81,30 @@ TEST_F(FolderBackend, MasksGoThroughTheStoredToFrameMapping) {
             camera_.height * camera_.width / 2);
 }
 
+// A mask region on a flat wall is a picture (dynamic.picture_veto): the front end drops it before
+// the mask reaches tracking or the dynamic memory, and counts it; standing in front of the wall,
+// the same region is kept.
+TEST_F(FolderBackend, APictureOnTheWallIsDroppedAndCounted) {
+  const cv::Rect corner(camera_.width - 50, 0, 50, 40);  // frame "b"'s mask
+  io::RgbdFrame wall = frame(0, "b");
+  wall.depth_m = cv::Mat(camera_.height, camera_.width, CV_32FC1, cv::Scalar(2.5f));
+  io::RgbdFrame standing = frame(1, "b");
+  standing.depth_m = wall.depth_m.clone();
+  standing.depth_m(corner).setTo(1.5f);
+
+  DynamicFrontEnd front_end(config_, camera_, "");
+  const CnnMask picture = front_end.cnn_mask(wall);
+  EXPECT_EQ(cv::countNonZero(picture.mask), 0);
+  EXPECT_EQ(picture.pictures_dropped, 1);
+  const CnnMask object = front_end.cnn_mask(standing);
+  EXPECT_EQ(cv::countNonZero(object.mask), corner.area());
+  EXPECT_EQ(object.pictures_dropped, 0);
+
+  config_.picture_veto.enabled = false;
+  DynamicFrontEnd without_veto(config_, camera_, "");
+  EXPECT_EQ(cv::countNonZero(without_veto.cnn_mask(wall).mask), corner.area());
+}
+
 // Only a missing model file may turn into geometry-only operation; a mistyped mask folder ran
 // without any masks and a warning about model_path.
 TEST_F(FolderBackend, AMissingFolderEndsTheRunInsteadOfFallingBack) {

@@ -20,28 +20,41 @@ void PictureVetoConfig::validate() const {
     fail("contour_window_px", "must be in 1..16");
   if (!(contour_m > 0)) fail("contour_m", "must be > 0");
   if (!(contour_quadratic >= 0)) fail("contour_quadratic", "must be >= 0");
+  if (hole_px < 1 || hole_px > 64) fail("hole_px", "must be in 1..64");
   if (min_near_pixels < 1) fail("min_near_pixels", "must be >= 1");
+  if (max_flood_pixels < 0) fail("max_flood_pixels", "must be >= 0");
 }
 
 namespace {
 
-/// 255 where a valid pixel has a valid pixel within the window farther by the contour threshold:
-/// the near side of an occluding contour. Depth dropouts (0) along the contour, as a Kinect and
-/// the generator's depth model leave them, are bridged by the window.
+/// 255 on the near side of an occluding contour: a valid pixel with, within contour_window_px,
+/// a valid pixel farther by the contour threshold, or a hole in the depth image at least
+/// 2 * hole_px + 1 pixels across (background beyond the sensor's range, a window, a shadow the
+/// object casts). The window bridges the narrow dropouts along a contour (up to
+/// contour_window_px - 1 pixels wide) that a Kinect and the generator's depth model leave.
 cv::Mat near_side_contours(const cv::Mat& depth_m, const PictureVetoConfig& config) {
   cv::Mat farthest;
   const int k = 2 * config.contour_window_px + 1;
   cv::dilate(depth_m, farthest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)),
              cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  // Pixels with no valid pixel within hole_px, then everything within contour_window_px of them.
+  cv::Mat beside_hole;
+  const cv::Mat invalid = depth_m <= 0.0f;
+  const int h = 2 * config.hole_px + 1;
+  cv::erode(invalid, beside_hole, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(h, h)),
+            cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  const int r = 2 * (config.hole_px + config.contour_window_px) + 1;
+  cv::dilate(beside_hole, beside_hole, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(r, r)));
   cv::Mat near(depth_m.size(), CV_8UC1, cv::Scalar(0));
   for (int v = 0; v < depth_m.rows; ++v) {
     const float* d = depth_m.ptr<float>(v);
     const float* f = farthest.ptr<float>(v);
+    const std::uint8_t* b = beside_hole.ptr<std::uint8_t>(v);
     std::uint8_t* n = near.ptr<std::uint8_t>(v);
     for (int u = 0; u < depth_m.cols; ++u) {
       const double z = d[u];
       if (!(z > 0.0)) continue;
-      if (f[u] - z > config.contour_m + config.contour_quadratic * z * z) n[u] = 255;
+      if (b[u] != 0 || f[u] - z > config.contour_m + config.contour_quadratic * z * z) n[u] = 255;
     }
   }
   return near;
@@ -51,12 +64,13 @@ cv::Mat near_side_contours(const cv::Mat& depth_m, const PictureVetoConfig& conf
 
 cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const PictureVetoConfig& config,
                       PictureVetoStats* stats) {
+  if (stats != nullptr) *stats = {};
   if (mask.empty()) return {};
   CV_Assert(mask.type() == CV_8UC1 && depth_m.type() == CV_32FC1 && mask.size() == depth_m.size());
   cv::Mat out = mask.clone();
   cv::Mat labels;
   const int num_labels = cv::connectedComponents(mask != 0, labels, 8, CV_32S);
-  if (stats != nullptr) *stats = {num_labels - 1, 0, 0};
+  if (stats != nullptr) stats->regions = num_labels - 1;
   if (num_labels <= 1) return out;
 
   // The pixels of each region, and its seeds (pixels with depth).
@@ -69,17 +83,23 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
       if (l[u] > 0) pixels[static_cast<std::size_t>(l[u])].push_back(v * cols + u);
     }
   }
-  const cv::Mat near = near_side_contours(depth_m, config);
-  const float* depth = depth_m.ptr<float>(0);
+  const cv::Mat depth_image = depth_m.isContinuous() ? depth_m : depth_m.clone();  // an ROI
+  const cv::Mat near = near_side_contours(depth_image, config);
+  const float* depth = depth_image.ptr<float>(0);
   const std::uint8_t* is_near = near.ptr<std::uint8_t>(0);
-  CV_Assert(depth_m.isContinuous() && near.isContinuous());
 
   // visited[i] = the region whose flood reached pixel i (regions' floods may overlap).
   std::vector<int> visited(static_cast<std::size_t>(rows) * cols, 0);
   std::vector<int> frontier;
   std::vector<int> next;
+  long flooded = 0;  // pixels reached beyond the regions, over all regions (the cost bound)
   for (int label = 1; label < num_labels; ++label) {
     const std::vector<int>& region = pixels[static_cast<std::size_t>(label)];
+    if (flooded >=
+        static_cast<long>(config.max_flood_pixels)) {  // budget spent: the rest is kept, unjudged
+      if (stats != nullptr) ++stats->unjudged;
+      continue;
+    }
     frontier.clear();
     int near_count = 0;
     for (const int i : region) {
@@ -112,6 +132,7 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
           }
         }
       }
+      flooded += static_cast<long>(next.size());
       frontier.swap(next);
     }
     if (near_count >= config.min_near_pixels) continue;  // stands in front of something: kept

@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""Offline check of the picture veto (dynamics::drop_pictures, docs/dynamics.md "Pictures") on
+the CNN masks a run saved: for every connected region of <run>/masks/cnn/*.png, is it a person
+(at least half of it inside the sequence's dynamic_mask/) and would the rule drop it?
+
+A re-implementation in Python of the C++ rule with its default settings, for measuring on saved
+masks without re-running the pipeline; the flood is an iterated constrained dilation, so region
+by region it matches the C++ breadth-first flood (8-neighbours, reach in steps). It needs
+python3-opencv and python3-numpy (apt). Slow: about 0.5 s per frame.
+
+  python3 scripts/picture-veto-regions.py data/syn_static_loop out/loop/masks/cnn [--step 3]
+
+Prints, per sequence, the true and false regions (and pixels) the rule drops.
+"""
+import argparse
+import glob
+import os
+
+import cv2
+import numpy as np
+
+REACH, CONT_M, CONT_Q, WIN, EDGE_M, EDGE_Q, HOLE, MIN_NEAR = 40, 0.03, 0.02, 3, 0.05, 0.03, 4, 10
+
+
+def read_list(path):
+    out = {}
+    if os.path.exists(path):
+        for line in open(path):
+            if line.startswith("#") or not line.strip():
+                continue
+            stamp, name = line.split()[:2]
+            out[round(float(stamp), 4)] = name
+    return out
+
+
+def shifted(a, dy, dx, fill):
+    """out[y, x] = a[y + dy, x + dx] (fill outside)."""
+    out = np.full_like(a, fill)
+    h, w = a.shape
+    out[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)] = \
+        a[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)]
+    return out
+
+
+def near_side(depth):
+    valid = depth > 0
+    k = 2 * WIN + 1
+    farthest = cv2.dilate(depth, np.ones((k, k), np.uint8), borderType=cv2.BORDER_CONSTANT,
+                          borderValue=0)
+    near = valid & (farthest - depth > EDGE_M + EDGE_Q * depth * depth)
+    h = 2 * HOLE + 1
+    hole = cv2.erode((~valid).astype(np.uint8), np.ones((h, h), np.uint8),
+                     borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    r = 2 * (HOLE + WIN) + 1
+    beside = cv2.dilate(hole, np.ones((r, r), np.uint8)) > 0
+    return near | (valid & beside)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("sequence")
+    ap.add_argument("cnn_masks")
+    ap.add_argument("--step", type=int, default=1, help="every n-th saved mask")
+    args = ap.parse_args()
+    assoc = {}
+    for line in open(os.path.join(args.sequence, "associations.txt")):
+        if not line.startswith("#") and line.strip():
+            f = line.split()
+            assoc[round(float(f[0]), 4)] = f[3]
+    truth = read_list(os.path.join(args.sequence, "dynamic_mask.txt"))
+    steps = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+    rows = []
+    for path in sorted(glob.glob(os.path.join(args.cnn_masks, "*.png")))[::args.step]:
+        key = round(float(os.path.basename(path)[:-4]), 4)
+        mask = cv2.imread(path, cv2.IMREAD_GRAYSCALE) > 0
+        depth = cv2.imread(os.path.join(args.sequence, assoc[key]),
+                           cv2.IMREAD_UNCHANGED).astype(np.float32) / 5000.0
+        gt = cv2.imread(os.path.join(args.sequence, truth[key]), cv2.IMREAD_GRAYSCALE) > 0
+        valid = depth > 0
+        near = near_side(depth)
+        tolerance = CONT_M + CONT_Q * depth * depth
+        # neighbour_ok[s][p]: p may be reached from p + s (the tolerance is that of p + s).
+        neighbour_ok = {s: np.abs(depth - shifted(depth, s[0], s[1], 0))
+                        < shifted(tolerance, s[0], s[1], 0) for s in steps}
+        count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+        for label in range(1, count):
+            region = labels == label
+            reached = region & valid
+            if not reached.any():
+                continue
+            for _ in range(REACH):
+                if (reached & near).sum() >= MIN_NEAR:
+                    break
+                grown = np.zeros_like(reached)
+                for s in steps:
+                    grown |= shifted(reached, s[0], s[1], False) & neighbour_ok[s]
+                grown &= valid & ~reached
+                if not grown.any():
+                    break
+                reached |= grown
+            area = int(region.sum())
+            rows.append((area, (region & gt).sum() / area >= 0.5, int((reached & near).sum()) < MIN_NEAR))
+    rows = np.array(rows, dtype=np.int64).reshape(-1, 3)
+    person, dropped = rows[:, 1] == 1, rows[:, 2] == 1
+    print(f"{os.path.basename(os.path.normpath(args.sequence))}: "
+          f"true regions dropped {(person & dropped).sum()} of {person.sum()} "
+          f"({rows[person & dropped, 0].sum()} of {rows[person, 0].sum()} px); "
+          f"false regions dropped {(~person & dropped).sum()} of {(~person).sum()} "
+          f"({rows[~person & dropped, 0].sum()} of {rows[~person, 0].sum()} px)")
+
+
+if __name__ == "__main__":
+    main()
