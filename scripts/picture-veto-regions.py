@@ -19,7 +19,7 @@ import os
 import cv2
 import numpy as np
 
-REACH, CONT_M, CONT_Q, WIN, EDGE_M, EDGE_Q, HOLE, MIN_NEAR = 40, 0.03, 0.02, 3, 0.05, 0.03, 4, 10
+REACH, CONT_M, CONT_Q, WIN, EDGE_M, EDGE_Q, HOLE, MIN_NEAR = 80, 0.03, 0.02, 3, 0.05, 0.03, 4, 10
 
 
 def read_list(path):

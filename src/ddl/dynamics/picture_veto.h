@@ -29,7 +29,7 @@ namespace ddl::dynamics {
 
 struct PictureVetoConfig {
   bool enabled = true;  // false = every CNN region is kept, a picture of a person on a wall too
-  int reach_px = 40;    // flood steps (8-neighbour) beyond the region's pixels
+  int reach_px = 80;    // flood steps (8-neighbour) beyond the region's pixels
   double continuity_m = 0.03;          // neighbours closer in depth than this, ...
   double continuity_quadratic = 0.02;  // ... plus this times depth^2 (1/m), are one surface
   int contour_window_px = 3;  // near-side contour: a valid pixel this close (bridges dropouts) ...
