@@ -130,10 +130,11 @@ TEST(PictureVeto, APersonInFrontOfBackgroundOutOfRangeIsKept) {
             room.body.area());
 }
 
-TEST(PictureVeto, RegionsOfInterestAreReadInPlace) {
+TEST(PictureVeto, RegionsOfInterestGiveTheResultOfTheirCopies) {
   Room room;
   room.mask(room.poster).setTo(255);
   room.mask(room.body).setTo(255);
+  // A non-continuous ROI (columns and rows cut out of a wider parent).
   const cv::Rect inner(10, 10, 640, 480);
   cv::Mat mask(500, 700, CV_8UC1, cv::Scalar(255));
   cv::Mat depth(500, 700, CV_32FC1, cv::Scalar(0.0f));
@@ -141,6 +142,17 @@ TEST(PictureVeto, RegionsOfInterestAreReadInPlace) {
   room.depth_m.copyTo(depth(inner));
   EXPECT_EQ(cv::countNonZero(drop_pictures(mask(inner), depth(inner), PictureVetoConfig{})),
             room.body.area());
+  // A continuous ROI (full rows) whose parent holds farther rows just above it: read past the
+  // ROI's edge, they would make the top of a poster at the ROI's top a contour.
+  Room top;
+  const cv::Rect poster(60, 0, 160, 120);
+  top.mask(poster).setTo(255);
+  cv::Mat parent(520, 640, CV_32FC1, cv::Scalar(9.0f));
+  top.depth_m.copyTo(parent.rowRange(40, 520));
+  const cv::Mat rows = parent.rowRange(40, 520);
+  ASSERT_TRUE(rows.isContinuous());
+  EXPECT_EQ(cv::countNonZero(drop_pictures(top.mask, rows, PictureVetoConfig{})), 0);
+  EXPECT_EQ(cv::countNonZero(drop_pictures(top.mask, rows.clone(), PictureVetoConfig{})), 0);
 }
 
 TEST(PictureVeto, AFloodBudgetKeepsTheRegionsItCannotJudge) {

@@ -1,6 +1,7 @@
 #include "ddl/dynamics/picture_veto.h"
 
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
@@ -83,7 +84,8 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
       if (l[u] > 0) pixels[static_cast<std::size_t>(l[u])].push_back(v * cols + u);
     }
   }
-  const cv::Mat depth_image = depth_m.isContinuous() ? depth_m : depth_m.clone();  // an ROI
+  // An ROI is copied: the filters below would read its parent image past its edges.
+  const cv::Mat depth_image = depth_m.isSubmatrix() ? depth_m.clone() : depth_m;
   const cv::Mat near = near_side_contours(depth_image, config);
   const float* depth = depth_image.ptr<float>(0);
   const std::uint8_t* is_near = near.ptr<std::uint8_t>(0);

@@ -108,6 +108,7 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
       dynamics::PictureVetoStats veto;
       out.mask = dynamics::drop_pictures(out.mask, frame.depth_m, config_.picture_veto, &veto);
       out.pictures_dropped = veto.dropped;
+      out.pictures_unjudged = veto.unjudged;
     }
     last_cnn_mask_ = out.mask.clone();
     last_cnn_index_ = frame.index;

@@ -32,7 +32,8 @@ struct CnnMask {
   double elapsed_ms = 0.0;  // inference and post-processing
   bool reused = false;      // the last CNN mask grown (dynamic.segmentation_interval), no inference
   bool turned = false;      // the frame was turned upright for the CNN (segmentation.upright)
-  int pictures_dropped = 0;  // regions dropped as pictures (dynamic.picture_veto)
+  int pictures_dropped = 0;   // regions dropped as pictures (dynamic.picture_veto)
+  int pictures_unjudged = 0;  // regions kept unjudged (picture_veto.max_flood_pixels spent)
 };
 
 struct DynamicMasks {

@@ -55,6 +55,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"geometry_checks_skipped", s.geometry_checks_skipped},
           {"segmentations_turned", s.segmentations_turned},
           {"cnn_pictures_dropped", s.cnn_pictures_dropped},
+          {"cnn_pictures_unjudged", s.cnn_pictures_unjudged},
           {"dense",
            {{"keyframes", s.dense.keyframes},
             {"masked_pixels", s.dense.masked_pixels},

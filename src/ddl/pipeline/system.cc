@@ -184,6 +184,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     masks.segmentation_ms = cnn->elapsed_ms;
     if (cnn->turned) ++stats_.segmentations_turned;
     stats_.cnn_pictures_dropped += static_cast<std::size_t>(cnn->pictures_dropped);
+    stats_.cnn_pictures_unjudged += static_cast<std::size_t>(cnn->pictures_unjudged);
     if (dynamic_->has_segmenter()) {
       timings_.record(cnn->reused ? "segmentation.reused_mask" : "segmentation",
                       masks.segmentation_ms);
