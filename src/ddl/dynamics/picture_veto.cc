@@ -74,7 +74,7 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
   if (stats != nullptr) stats->regions = num_labels - 1;
   if (num_labels <= 1) return out;
 
-  // The pixels of each region, and its seeds (pixels with depth).
+  // The pixels of each region (its seeds are those with depth, taken below).
   const int rows = mask.rows;
   const int cols = mask.cols;
   std::vector<std::vector<int>> pixels(static_cast<std::size_t>(num_labels));
@@ -97,8 +97,8 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
   long flooded = 0;  // pixels reached beyond the regions, over all regions (the cost bound)
   for (int label = 1; label < num_labels; ++label) {
     const std::vector<int>& region = pixels[static_cast<std::size_t>(label)];
-    if (flooded >=
-        static_cast<long>(config.max_flood_pixels)) {  // budget spent: the rest is kept, unjudged
+    // Budget spent: this region and the rest are kept, unjudged.
+    if (flooded >= static_cast<long>(config.max_flood_pixels)) {
       if (stats != nullptr) ++stats->unjudged;
       continue;
     }

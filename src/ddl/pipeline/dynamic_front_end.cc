@@ -103,7 +103,8 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
     }
     if (folder && stored_mask_mapping_) mask = stored_mask_mapping_(mask);
     out.mask = trimmed(mask);
-    // Pictures are judged on the network's own masks only: a reused mask was judged when made.
+    // Pictures are judged once per mask the backend gives (the network's or a folder's); a
+    // reused mask was judged when it was made.
     if (config_.picture_veto.enabled && !frame.depth_m.empty()) {
       dynamics::PictureVetoStats veto;
       out.mask = dynamics::drop_pictures(out.mask, frame.depth_m, config_.picture_veto, &veto);
