@@ -10,7 +10,8 @@ come from a run with the veto off (`dynamic.picture_veto.enabled: false`, or a b
 and the default CNN schedule: only the masks of frames the network ran on (every second frame
 from the first) are judged, as in the pipeline, and the reused masks between them are skipped.
 Depth and ground truth are undistorted as the pipeline does it (camera.yaml's distortion,
-nearest neighbour). The flood budget (max_flood_pixels) is not modelled. It needs python3-opencv
+nearest neighbour); the blank margin that leaves is no depth hole (--margin-is-hole: as before
+stop 23). The flood budget (max_flood_pixels) is not modelled. It needs python3-opencv
 and python3-numpy (apt). Slow: about 0.5-1 s per frame.
 
   python3 scripts/picture-veto-regions.py data/syn_static_loop out/loop/masks/cnn [--step 2]
@@ -48,7 +49,7 @@ def shifted(a, dy, dx, fill):
     return out
 
 
-def near_side(depth, hole_px):
+def near_side(depth, hole_px, area=None):
     valid = depth > 0
     k = 2 * WIN + 1
     farthest = cv2.dilate(depth, np.ones((k, k), np.uint8), borderType=cv2.BORDER_CONSTANT,
@@ -57,7 +58,8 @@ def near_side(depth, hole_px):
     if hole_px == 0:  # the first version: no hole rule
         return near
     h = 2 * hole_px + 1
-    hole = cv2.erode((~valid).astype(np.uint8), np.ones((h, h), np.uint8),
+    invalid = ~valid if area is None else ~valid & area  # the blank margin is no hole
+    hole = cv2.erode(invalid.astype(np.uint8), np.ones((h, h), np.uint8),
                      borderType=cv2.BORDER_CONSTANT, borderValue=0)
     r = 2 * (hole_px + WIN) + 1
     beside = cv2.dilate(hole, np.ones((r, r), np.uint8)) > 0
@@ -83,6 +85,8 @@ def main():
     ap.add_argument("--interval", type=int, default=2, help="dynamic.segmentation_interval")
     ap.add_argument("--reach", type=int, default=80, help="picture_veto.reach_px")
     ap.add_argument("--hole-px", type=int, default=4, help="picture_veto.hole_px; 0 = no hole rule")
+    ap.add_argument("--margin-is-hole", action="store_true",
+                    help="count undistortion's blank margin as a depth hole (builds before stop 23)")
     args = ap.parse_args()
     assoc, index = {}, {}
     for line in open(os.path.join(args.sequence, "associations.txt")):
@@ -93,8 +97,13 @@ def main():
             index[key] = len(index)
     K, dist, size, depth_factor = read_camera(os.path.join(args.sequence, "camera.yaml"))
     undistort = None
+    sensor_area = None  # where an undistorted pixel has a stored pixel (Undistorter::source_area)
     if np.any(dist != 0):
         undistort = cv2.initUndistortRectifyMap(K, dist, None, K, size, cv2.CV_32FC1)
+        if not args.margin_is_hole:
+            sensor_area = cv2.remap(np.full((size[1], size[0]), 255, np.uint8), undistort[0],
+                                    undistort[1], cv2.INTER_NEAREST,
+                                    borderMode=cv2.BORDER_CONSTANT, borderValue=0) > 0
     truth = read_list(os.path.join(args.sequence, "dynamic_mask.txt"))
     steps = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
     rows = []
@@ -115,7 +124,7 @@ def main():
                            borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         gt = gt > 0
         valid = depth > 0
-        near = near_side(depth, args.hole_px)
+        near = near_side(depth, args.hole_px, sensor_area)
         tolerance = CONT_M + CONT_Q * depth * depth
         # neighbour_ok[s][p]: p may be reached from p + s (the tolerance is that of p + s).
         neighbour_ok = {s: np.abs(depth - shifted(depth, s[0], s[1], 0))

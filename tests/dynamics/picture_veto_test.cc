@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "config_error_check.h"
+#include "ddl/camera/pinhole_camera.h"
 
 namespace ddl::dynamics {
 namespace {
@@ -128,6 +130,44 @@ TEST(PictureVeto, APersonInFrontOfBackgroundOutOfRangeIsKept) {
   room.mask(room.body).setTo(255);
   EXPECT_EQ(cv::countNonZero(drop_pictures(room.mask, room.depth_m, PictureVetoConfig{})),
             room.body.area());
+}
+
+TEST(PictureVeto, TheBlankMarginOfAnUndistortedFrameIsNoHole) {
+  // fr1's calibration: undistortion leaves pixels without a source along the image's edges.
+  camera::PinholeCamera fr1;
+  fr1.fx = 517.306408;
+  fr1.fy = 516.469215;
+  fr1.cx = 318.64304;
+  fr1.cy = 255.313989;
+  fr1.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  const cv::Mat area = camera::Undistorter(fr1).source_area();
+  ASSERT_EQ(area.size(), cv::Size(640, 480));
+  ASSERT_EQ(area.at<std::uint8_t>(0, 0), 0) << "fr1's corner has no source pixel";
+  ASSERT_EQ(area.at<std::uint8_t>(240, 320), 255);
+  // The room as the undistorted frame shows it: no depth in the margin.
+  Room room;
+  room.depth_m.setTo(0.0f, area == 0);
+  const cv::Rect corner_poster(16, 16, 120, 90);
+  room.mask(corner_poster).setTo(255);
+  room.mask(room.body).setTo(255);
+  // Without the area the margin reads as a hole beside the poster, as if it stood in front of
+  // background out of range: kept.
+  EXPECT_EQ(
+      cv::countNonZero(drop_pictures(room.mask, room.depth_m, PictureVetoConfig{})(corner_poster)),
+      corner_poster.area());
+  PictureVetoStats stats;
+  const cv::Mat out = drop_pictures(room.mask, room.depth_m, PictureVetoConfig{}, &stats, area);
+  EXPECT_EQ(cv::countNonZero(out(corner_poster)), 0);
+  EXPECT_EQ(cv::countNonZero(out), room.body.area());
+  EXPECT_EQ(stats.dropped, 1);
+  // A real hole inside the area still counts: nothing within range behind the person.
+  Room far;
+  far.depth_m.setTo(0.0f);
+  far.stand(far.body, 2.0f);
+  far.mask(far.body).setTo(255);
+  EXPECT_EQ(
+      cv::countNonZero(drop_pictures(far.mask, far.depth_m, PictureVetoConfig{}, nullptr, area)),
+      far.body.area());
 }
 
 TEST(PictureVeto, RegionsOfInterestGiveTheResultOfTheirCopies) {

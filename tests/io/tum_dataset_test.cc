@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -463,6 +464,39 @@ TEST(TumDatasetFr1Rpy, FrameHasMetricDepthAndIsUndistorted) {
   EXPECT_GT(depth_moved, depth_checked / 2);  // the distortion of fr1 moves most pixels
   EXPECT_LT(rgb_error / rgb_checked, 1.0);    // bilinear with OpenCV's 1/32-pixel weights
   EXPECT_GT(rgb_error_if_not_undistorted / rgb_checked, 3.0 * rgb_error / rgb_checked);
+  EXPECT_EQ(cv::norm(dataset.source_area(), camera::Undistorter(cam).source_area(), cv::NORM_INF),
+            0.0);
+}
+
+// The source area holds the pixels whose distorted position lies in the stored image.
+TEST(Undistorter, TheSourceAreaIsWhereAPixelHasAStoredPixel) {
+  const camera::PinholeCamera cam = tum1_camera();
+  const cv::Mat area = camera::Undistorter(cam).source_area();
+  ASSERT_EQ(area.type(), CV_8UC1);
+  ASSERT_EQ(area.size(), cv::Size(640, 480));
+  const auto& k = cam.distortion;
+  int inside = 0, outside = 0;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      const double x = (u - cam.cx) / cam.fx, y = (v - cam.cy) / cam.fy;
+      const double r2 = x * x + y * y;
+      const double radial = 1 + k[0] * r2 + k[1] * r2 * r2 + k[4] * r2 * r2 * r2;
+      const double ud = cam.fx * (x * radial + 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x)) + cam.cx;
+      const double vd = cam.fy * (y * radial + k[2] * (r2 + 2 * y * y) + 2 * k[3] * x * y) + cam.cy;
+      // Away from the edge's rounding tie (the map is fixed point).
+      if (ud > 0.1 && vd > 0.1 && ud < 639.4 && vd < 479.4) {
+        EXPECT_EQ(area.at<std::uint8_t>(v, u), 255) << "at (" << u << ", " << v << ")";
+        ++inside;
+      } else if (ud < -0.6 || vd < -0.6 || ud > 640.1 || vd > 480.1) {
+        EXPECT_EQ(area.at<std::uint8_t>(v, u), 0) << "at (" << u << ", " << v << ")";
+        ++outside;
+      }
+    }
+  }
+  EXPECT_GT(outside, 1000);   // fr1 leaves a margin
+  EXPECT_GT(inside, 280000);  // of 307 200; the margin is a few percent
+  // Without distortion nothing is undistorted: no area, every pixel is the sensor's.
+  EXPECT_TRUE(camera::Undistorter(cam.undistorted()).source_area().empty());
 }
 
 }  // namespace

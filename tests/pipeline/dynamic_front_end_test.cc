@@ -105,6 +105,29 @@ TEST_F(FolderBackend, APictureOnTheWallIsDroppedAndCounted) {
   EXPECT_EQ(cv::countNonZero(without_veto.cnn_mask(wall).mask), corner.area());
 }
 
+// A distorted camera's frames have a blank margin without depth after undistortion. Beside a
+// picture it reads as a depth hole (something out of range behind it) until the front end knows
+// where the sensor's image lies (io::DatasetReader::source_area); then the picture is dropped.
+TEST_F(FolderBackend, TheUndistortionMarginIsNoHoleBesideAPicture) {
+  const cv::Rect corner(camera_.width - 50, 0, 50, 40);  // frame "b"'s mask
+  cv::Mat area(camera_.height, camera_.width, CV_8UC1, cv::Scalar(0));
+  area(cv::Rect(12, 12, camera_.width - 24, camera_.height - 24)).setTo(255);
+  io::RgbdFrame wall = frame(0, "b");
+  wall.depth_m = cv::Mat(camera_.height, camera_.width, CV_32FC1, cv::Scalar(2.5f));
+  wall.depth_m.setTo(0.0f, area == 0);
+
+  DynamicFrontEnd margin_unknown(config_, camera_, "");
+  const CnnMask kept = margin_unknown.cnn_mask(wall);
+  EXPECT_EQ(cv::countNonZero(kept.mask), corner.area());
+  EXPECT_EQ(kept.pictures_dropped, 0);
+
+  DynamicFrontEnd margin_known(config_, camera_, "");
+  margin_known.set_source_area(area);
+  const CnnMask dropped = margin_known.cnn_mask(wall);
+  EXPECT_EQ(cv::countNonZero(dropped.mask), 0);
+  EXPECT_EQ(dropped.pictures_dropped, 1);
+}
+
 // Only a missing model file may turn into geometry-only operation; a mistyped mask folder ran
 // without any masks and a warning about model_path.
 TEST_F(FolderBackend, AMissingFolderEndsTheRunInsteadOfFallingBack) {

@@ -54,6 +54,9 @@ Undistorter::Undistorter(const PinholeCamera& camera) : active_(camera.has_disto
   cv::convertMaps(map_x, map_y, map_xy_, map_interpolation_, CV_16SC2, false);
   cv::Mat unused;
   cv::convertMaps(map_x, map_y, map_nearest_, unused, CV_16SC2, true);
+  const cv::Mat everywhere(camera.height, camera.width, CV_8UC1, cv::Scalar(255));
+  cv::remap(everywhere, source_area_, map_nearest_, cv::Mat(), cv::INTER_NEAREST,
+            cv::BORDER_CONSTANT, cv::Scalar(0));
 }
 
 cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {

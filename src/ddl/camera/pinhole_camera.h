@@ -55,9 +55,13 @@ class Undistorter {
   bool active() const { return active_; }
   cv::Mat undistort_rgb(const cv::Mat& rgb) const;
   cv::Mat undistort_depth(const cv::Mat& depth) const;
+  /// CV_8UC1, 255 where an undistorted pixel has a source pixel in the stored image (where the
+  /// sensor could measure), 0 in the blank margin undistortion leaves; empty when not active.
+  const cv::Mat& source_area() const { return source_area_; }
 
  private:
   bool active_ = false;
+  cv::Mat source_area_;
   cv::Mat map_xy_, map_interpolation_;  // fixed-point colour maps (CV_16SC2, CV_16UC1)
   cv::Mat map_nearest_;                 // fixed-point depth map, rounded positions (CV_16SC2)
 };

@@ -33,14 +33,16 @@ namespace {
 /// 2 * hole_px + 1 pixels across (background beyond the sensor's range, a window, a shadow the
 /// object casts). The window bridges the narrow dropouts along a contour (up to
 /// contour_window_px - 1 pixels wide) that a Kinect and the generator's depth model leave.
-cv::Mat near_side_contours(const cv::Mat& depth_m, const PictureVetoConfig& config) {
+cv::Mat near_side_contours(const cv::Mat& depth_m, const cv::Mat& source_area,
+                           const PictureVetoConfig& config) {
   cv::Mat farthest;
   const int k = 2 * config.contour_window_px + 1;
   cv::dilate(depth_m, farthest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)),
              cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
   // Pixels with no valid pixel within hole_px, then everything within contour_window_px of them.
   cv::Mat beside_hole;
-  const cv::Mat invalid = depth_m <= 0.0f;
+  cv::Mat invalid = depth_m <= 0.0f;
+  if (!source_area.empty()) invalid &= source_area;  // no hole where the sensor cannot see
   const int h = 2 * config.hole_px + 1;
   cv::erode(invalid, beside_hole, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(h, h)),
             cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
@@ -64,10 +66,12 @@ cv::Mat near_side_contours(const cv::Mat& depth_m, const PictureVetoConfig& conf
 }  // namespace
 
 cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const PictureVetoConfig& config,
-                      PictureVetoStats* stats) {
+                      PictureVetoStats* stats, const cv::Mat& source_area) {
   if (stats != nullptr) *stats = {};
   if (mask.empty()) return {};
   CV_Assert(mask.type() == CV_8UC1 && depth_m.type() == CV_32FC1 && mask.size() == depth_m.size());
+  CV_Assert(source_area.empty() ||
+            (source_area.type() == CV_8UC1 && source_area.size() == mask.size()));
   cv::Mat out = mask.clone();
   cv::Mat labels;
   const int num_labels = cv::connectedComponents(mask != 0, labels, 8, CV_32S);
@@ -86,7 +90,7 @@ cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const Picture
   }
   // An ROI is copied: the filters below would read its parent image past its edges.
   const cv::Mat depth_image = depth_m.isSubmatrix() ? depth_m.clone() : depth_m;
-  const cv::Mat near = near_side_contours(depth_image, config);
+  const cv::Mat near = near_side_contours(depth_image, source_area, config);
   const float* depth = depth_image.ptr<float>(0);
   const std::uint8_t* is_near = near.ptr<std::uint8_t>(0);
 

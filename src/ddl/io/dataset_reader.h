@@ -30,6 +30,10 @@ class DatasetReader {
   /// RGB file) moved onto the grid of the frames frame() returns, nearest neighbour. Identity
   /// for datasets stored without distortion.
   virtual cv::Mat undistort_mask(const cv::Mat& stored) const { return stored; }
+  /// CV_8UC1 in the frames' grid: 255 where a pixel comes from the stored image, 0 in the blank
+  /// margin that undistortion leaves (camera::Undistorter::source_area). Empty when every pixel
+  /// comes from the stored image.
+  virtual cv::Mat source_area() const { return {}; }
   /// Path of the ground-truth trajectory (TUM format) when the dataset has one.
   virtual std::optional<std::string> groundtruth_path() const = 0;
   /// Short dataset name for logs and summaries (e.g. "rgbd_dataset_freiburg1_rpy").

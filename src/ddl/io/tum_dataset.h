@@ -89,6 +89,7 @@ class TumDataset : public DatasetReader {
   cv::Mat undistort_mask(const cv::Mat& stored) const override {
     return undistorter_.undistort_depth(stored);  // nearest neighbour, no new values
   }
+  cv::Mat source_area() const override { return undistorter_.source_area(); }
   std::optional<std::string> groundtruth_path() const override { return groundtruth_path_; }
   /// The accelerometer log (<dir>/accelerometer.txt), when the sequence has one and
   /// SequenceOptions::read_accelerometer asked for it.

@@ -107,7 +107,8 @@ CnnMask DynamicFrontEnd::cnn_mask(const io::RgbdFrame& frame) {
     // reused mask was judged when it was made.
     if (config_.picture_veto.enabled && !frame.depth_m.empty()) {
       dynamics::PictureVetoStats veto;
-      out.mask = dynamics::drop_pictures(out.mask, frame.depth_m, config_.picture_veto, &veto);
+      out.mask = dynamics::drop_pictures(out.mask, frame.depth_m, config_.picture_veto, &veto,
+                                         source_area_);
       out.pictures_dropped = veto.dropped;
       out.pictures_unjudged = veto.unjudged;
     }

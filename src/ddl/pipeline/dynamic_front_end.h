@@ -66,6 +66,10 @@ class DynamicFrontEnd {
   void set_stored_mask_mapping(std::function<cv::Mat(const cv::Mat&)> mapping) {
     stored_mask_mapping_ = std::move(mapping);
   }
+  /// Where the frames' pixels come from the sensor's image (io::DatasetReader::source_area; empty
+  /// = everywhere). The picture veto does not take the blank margin undistortion leaves for a
+  /// depth hole beside a region. Call before the first cnn_mask().
+  void set_source_area(const cv::Mat& area) { source_area_ = area; }
 
   /// CNN mask of one frame (empty when segmentation is off); frames in index order. With
   /// dynamic.segmentation_interval > 1 most frames of the ONNX backend reuse the last inferred
@@ -131,6 +135,7 @@ class DynamicFrontEnd {
   std::optional<std::size_t> last_cnn_index_;
   mutable std::mutex cache_mutex_;
   std::function<cv::Mat(const cv::Mat&)> stored_mask_mapping_;
+  cv::Mat source_area_;  // see set_source_area
   struct KeyframeImages {
     cv::Mat depth_m;
     cv::Mat dynamic_mask;

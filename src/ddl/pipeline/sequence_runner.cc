@@ -92,6 +92,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   // Masks precomputed for the stored RGB files reach the frames' (undistorted) grid.
   system.set_stored_mask_mapping(
       [&dataset](const cv::Mat& mask) { return dataset.undistort_mask(mask); });
+  system.set_source_area(dataset.source_area());
   std::size_t end = dataset.size();
   if (options.max_frames > 0 && options.max_frames < end - begin) end = begin + options.max_frames;
   const std::size_t total = end - begin;

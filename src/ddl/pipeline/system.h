@@ -113,6 +113,8 @@ class System {
   void set_stored_mask_mapping(std::function<cv::Mat(const cv::Mat&)> mapping) {
     dynamic_->set_stored_mask_mapping(std::move(mapping));
   }
+  /// See DynamicFrontEnd::set_source_area; before the first process() or segment().
+  void set_source_area(const cv::Mat& area) { dynamic_->set_source_area(area); }
   const SystemConfig& config() const { return config_; }
 
  private:
