@@ -493,6 +493,9 @@ TEST(Undistorter, TheSourceAreaIsWhereAPixelHasAStoredPixel) {
       }
     }
   }
+  // Exactly the pixels that undistorted depth can fill (the same nearest-neighbour map).
+  const cv::Mat ones(480, 640, CV_16UC1, cv::Scalar(1));
+  EXPECT_EQ(cv::countNonZero(area != (camera::Undistorter(cam).undistort_depth(ones) > 0)), 0);
   EXPECT_GT(outside, 1000);   // fr1 leaves a margin
   EXPECT_GT(inside, 280000);  // of 307 200; the margin is a few percent
   // Without distortion nothing is undistorted: no area, every pixel is the sensor's.

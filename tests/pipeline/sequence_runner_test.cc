@@ -37,10 +37,13 @@ class MemoryDataset final : public io::DatasetReader {
   const camera::PinholeCamera& camera() const override { return camera_; }
   std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
   std::string name() const override { return "memory"; }
+  cv::Mat source_area() const override { return source_area_; }
+  void set_source_area(const cv::Mat& area) { source_area_ = area; }
 
  private:
   camera::PinholeCamera camera_;
   std::vector<io::RgbdFrame> frames_;
+  cv::Mat source_area_;
 };
 
 std::size_t pose_lines(const fs::path& trajectory) {
@@ -88,6 +91,24 @@ TEST(SequenceRunner, TheFrameCallbackSeesEveryFrameAndCanStopTheRun) {
 
 // Every keyframe's local mapping is timed as a whole and stage by stage; the stages lie within
 // the whole.
+// The picture veto learns from the dataset where the sensor's image lies: the blank margin of a
+// distorted camera's undistorted frames is no depth hole (docs/dynamics.md, "Pictures").
+TEST(SequenceRunner, TheDynamicFrontEndGetsTheDatasetsSourceArea) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 3));
+  MemoryDataset dataset(*source);
+  const camera::PinholeCamera& camera = dataset.camera();
+  cv::Mat area(camera.height, camera.width, CV_8UC1, cv::Scalar(0));
+  area(cv::Rect(10, 10, camera.width - 20, camera.height - 20)).setTo(255);
+  dataset.set_source_area(area);
+  System system(testing::core_config(), camera, vocabulary);
+  ASSERT_TRUE(system.dynamic_front_end().source_area().empty());
+  run_sequence(dataset, system,
+               fresh_run_options(fs::path(::testing::TempDir()) / "sequence_runner_area"));
+  EXPECT_EQ(cv::norm(system.dynamic_front_end().source_area(), area, cv::NORM_INF), 0.0);
+}
+
 TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {
   const auto vocabulary = testing::default_vocabulary();
   if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";

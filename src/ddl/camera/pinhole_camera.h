@@ -55,8 +55,10 @@ class Undistorter {
   bool active() const { return active_; }
   cv::Mat undistort_rgb(const cv::Mat& rgb) const;
   cv::Mat undistort_depth(const cv::Mat& depth) const;
-  /// CV_8UC1, 255 where an undistorted pixel has a source pixel in the stored image (where the
-  /// sensor could measure), 0 in the blank margin undistortion leaves; empty when not active.
+  /// CV_8UC1, 255 where an undistorted pixel has a source pixel in the stored image (exactly the
+  /// pixels undistort_depth can fill), 0 in the blank margin undistortion leaves; empty when not
+  /// active. A band the stored depth never measures (a Kinect's, along the top and right of fr1's
+  /// depth images) is not known here and lies inside the area.
   const cv::Mat& source_area() const { return source_area_; }
 
  private:

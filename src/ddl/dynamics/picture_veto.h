@@ -20,9 +20,10 @@
 // without depth, and every region after the floods of this mask reached max_flood_pixels.
 // Known limits (docs/dynamics.md, "Pictures"): a picture on a screen is kept (the screen stands
 // in front of the wall); mixed depth pixels along a step can let the flood climb onto a nearer
-// object and keep a picture beside it. Both err on the side of keeping a mask. Outside the
-// sensor's area (source_area) nothing is a hole: the blank margin of an undistorted frame would
-// otherwise be one along the image's edges.
+// object and keep a picture beside it. Both err on the side of keeping a mask. Outside
+// source_area nothing is a hole: the blank margin of an undistorted frame would otherwise be one
+// along the image's edges. A band the depth sensor never measures (fr1's top and right, about
+// 35 px) lies inside the area and still counts as a hole, keeping a picture next to it.
 // Pure function: thread-safe.
 
 #include <opencv2/core.hpp>
@@ -57,10 +58,10 @@ struct PictureVetoStats {
 
 /// `mask` (CV_8UC1, non-zero = dynamic class) without the regions that stand in front of
 /// nothing in `depth_m` (CV_32FC1 metres, 0 = none, the mask's size; either may be an ROI).
-/// `source_area` (CV_8UC1, the mask's size, or empty = everywhere): where the sensor could
-/// measure; a pixel outside it (the blank margin undistortion leaves) is no depth hole, as the
-/// world beyond the image's edge is none. Returns a new buffer; `mask` is not changed. `stats`,
-/// when given, is overwritten.
+/// `source_area` (CV_8UC1, the mask's size, or empty = everywhere): the pixels with a stored
+/// pixel behind them (io::DatasetReader::source_area); a pixel outside it (the blank margin
+/// undistortion leaves) is no depth hole, as the world beyond the image's edge is none. Returns a
+/// new buffer; `mask` is not changed. `stats`, when given, is overwritten.
 cv::Mat drop_pictures(const cv::Mat& mask, const cv::Mat& depth_m, const PictureVetoConfig& config,
                       PictureVetoStats* stats = nullptr, const cv::Mat& source_area = cv::Mat());
 

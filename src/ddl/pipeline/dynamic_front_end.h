@@ -70,6 +70,7 @@ class DynamicFrontEnd {
   /// = everywhere). The picture veto does not take the blank margin undistortion leaves for a
   /// depth hole beside a region. Call before the first cnn_mask().
   void set_source_area(const cv::Mat& area) { source_area_ = area; }
+  const cv::Mat& source_area() const { return source_area_; }
 
   /// CNN mask of one frame (empty when segmentation is off); frames in index order. With
   /// dynamic.segmentation_interval > 1 most frames of the ONNX backend reuse the last inferred
