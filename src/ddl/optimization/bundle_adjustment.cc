@@ -165,6 +165,9 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
 
   ceres::Solver::Options options =
       detail::base_options(config.num_threads, schedule.initial_iterations);
+  // Ceres edits the ordering it is given (it removes the constant blocks), so each solve gets
+  // its own copy of the one built here.
+  const ceres::ParameterBlockOrdering elimination_order = *ordering;
   options.linear_solver_ordering = ordering;
   result.linear_solver = configure_linear_solver(config, free_poses, &options);
   detail::ControlCallback callback(control);
@@ -203,6 +206,10 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
     robust = false;
     if (schedule.refine_iterations > 0) {
       options.max_num_iterations = schedule.refine_iterations;
+      if (options.linear_solver_ordering) {
+        options.linear_solver_ordering =
+            std::make_shared<ceres::ParameterBlockOrdering>(elimination_order);
+      }
       ceres::Solve(options, &ceres_problem, &summary);
       result.failed = !detail::solution_usable(summary, "bundle adjustment (refinement)");
       result.final_cost = summary.final_cost;
