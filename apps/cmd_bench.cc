@@ -43,9 +43,10 @@ struct Sequence {
 };
 
 void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream file(path);
-  file << text;
-  if (!file) throw InputError::at(path.string(), "cannot write");
+  write_file_atomically(path, "the bench's tables", [&](std::ostream& file) {
+    file << text;
+    return true;
+  });
 }
 
 /// The sequences to run, validated before anything runs. Named folders must exist and hold

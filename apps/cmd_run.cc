@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -135,16 +134,14 @@ RunResult run_sequence_command(const RunArgs& args,
   if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
   create_folder(args.output_dir, "the run's outputs");
-  {
-    const fs::path config_out = fs::path(args.output_dir) / "config.yaml";
-    std::ofstream file(config_out);
-    file << config::system_config_to_yaml(config);
-    if (!file)
-      throw InputError::at(config_out.string(), "cannot write the effective configuration");
-    const fs::path camera_out = fs::path(args.output_dir) / "camera.yaml";
-    std::ofstream camera_file(camera_out);
-    camera_file << config::camera_to_yaml(dataset->camera());
-  }
+  const auto write_text = [&](const char* name, const std::string& text, const char* what) {
+    write_file_atomically(fs::path(args.output_dir) / name, what, [&](std::ostream& file) {
+      file << text;
+      return true;
+    });
+  };
+  write_text("config.yaml", config::system_config_to_yaml(config), "the effective configuration");
+  write_text("camera.yaml", config::camera_to_yaml(dataset->camera()), "the camera of the frames");
 
   pipeline::System system(config, dataset->camera(), vocabulary);
 

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
 
 #include "ddl/core/error.h"
@@ -53,6 +55,74 @@ TEST_F(CreateFolderTest, AFileInTheWayIsAnInputErrorNamingTheFolderAndItsUse) {
   }
   EXPECT_THROW(create_parent_folder(file / "out.txt", "the trajectory"), InputError);
   EXPECT_TRUE(fs::is_regular_file(file));
+}
+
+std::string read_all(const fs::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A file is replaced whole or not at all: a failed or throwing writer leaves the previous file
+// and no temporary file; a successful one replaces it.
+TEST_F(CreateFolderTest, AnAtomicWriteReplacesTheFileWholeOrNotAtAll) {
+  const fs::path file = root_ / "out" / "summary.json";
+  const auto writes = [](const std::string& text) {
+    return [text](std::ostream& out) {
+      out << text;
+      return true;
+    };
+  };
+  write_file_atomically(file, "the test's summary", writes("first"));
+  EXPECT_EQ(read_all(file), "first");
+  write_file_atomically(file, "the test's summary", writes("second"));
+  EXPECT_EQ(read_all(file), "second");
+
+  try {
+    write_file_atomically(file, "the test's summary", [](std::ostream& out) {
+      out << "half";
+      return false;
+    });
+    ADD_FAILURE() << "no error for a failed write";
+  } catch (const OutputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(file.string()), std::string::npos) << message;
+    EXPECT_NE(message.find("cannot write the test's summary"), std::string::npos) << message;
+  }
+  EXPECT_THROW(write_file_atomically(file, "the test's summary",
+                                     [](std::ostream& out) -> bool {
+                                       out << "half";
+                                       throw std::runtime_error("the writer failed");
+                                     }),
+               std::runtime_error);
+  EXPECT_EQ(read_all(file), "second");
+  EXPECT_FALSE(fs::exists(root_ / "out" / "summary.json.partial"));
+
+  // A folder where the file should go: the rename fails, nothing is left behind.
+  fs::create_directories(root_ / "out" / "taken");
+  EXPECT_THROW(write_file_atomically(root_ / "out" / "taken", "the test's file", writes("x")),
+               OutputError);
+  EXPECT_TRUE(fs::is_directory(root_ / "out" / "taken"));
+  EXPECT_FALSE(fs::exists(root_ / "out" / "taken.partial"));
+
+  // A symbolic link stays a link: its target is written.
+  fs::create_symlink(file, root_ / "out" / "link.json");
+  write_file_atomically(root_ / "out" / "link.json", "the test's summary", writes("third"));
+  EXPECT_TRUE(fs::is_symlink(root_ / "out" / "link.json"));
+  EXPECT_EQ(read_all(file), "third");
+}
+
+// A device is written into, never replaced (as root, a rename would put a regular file in
+// /dev/full's place): the full disk it simulates is an OutputError.
+TEST_F(CreateFolderTest, ADeviceIsWrittenIntoNotReplaced) {
+  if (!fs::is_character_file("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  EXPECT_THROW(write_file_atomically("/dev/full", "the test's file",
+                                     [](std::ostream& out) {
+                                       out << std::string(1 << 16, 'x');
+                                       return true;
+                                     }),
+               OutputError);
+  EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  EXPECT_FALSE(fs::exists("/dev/full.partial"));
 }
 
 }  // namespace

@@ -9,9 +9,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "ddl/core/error.h"
 #include "ddl/io/dataset_reader.h"
 #include "ddl/pipeline/frame_pacer.h"
 #include "ddl/pipeline/system.h"
@@ -36,7 +38,8 @@ class MemoryDataset final : public io::DatasetReader {
   io::RgbdFrame frame(std::size_t i) const override { return frames_.at(i); }
   const camera::PinholeCamera& camera() const override { return camera_; }
   std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
-  std::string name() const override { return "memory"; }
+  std::string name() const override { return name_; }
+  void set_name(const std::string& name) { name_ = name; }
   cv::Mat source_area() const override { return source_area_; }
   void set_source_area(const cv::Mat& area) { source_area_ = area; }
 
@@ -44,6 +47,7 @@ class MemoryDataset final : public io::DatasetReader {
   camera::PinholeCamera camera_;
   std::vector<io::RgbdFrame> frames_;
   cv::Mat source_area_;
+  std::string name_ = "memory";
 };
 
 std::size_t pose_lines(const fs::path& trajectory) {
@@ -107,6 +111,71 @@ TEST(SequenceRunner, TheDynamicFrontEndGetsTheDatasetsSourceArea) {
   run_sequence(dataset, system,
                fresh_run_options(fs::path(::testing::TempDir()) / "sequence_runner_area"));
   EXPECT_EQ(cv::norm(system.dynamic_front_end().source_area(), area, cv::NORM_INF), 0.0);
+}
+
+// An output that cannot be written (here a folder stands where the camera trajectory goes) does
+// not stop the others: summary.json lists it under output_errors and says the run failed, which
+// then ends with an OutputError naming the file. A dataset name that is not UTF-8 reaches
+// summary.json with U+FFFD in place of its bad byte instead of emptying the file.
+TEST(SequenceRunner, AnOutputThatCannotBeWrittenFailsTheRunAfterTheOthers) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 5));
+  MemoryDataset dataset(*source);
+  dataset.set_name("caf\xe9");
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_output_error";
+  const RunOptions options = fresh_run_options(out);
+  fs::create_directories(out / "CameraTrajectory.txt");
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  try {
+    run_sequence(dataset, system, options);
+    ADD_FAILURE() << "the run did not fail";
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("CameraTrajectory.txt"), std::string::npos) << e.what();
+  }
+  std::ifstream file(out / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(file);
+  EXPECT_TRUE(summary.at("failed").get<bool>());
+  ASSERT_EQ(summary.at("output_errors").size(), 1u);
+  EXPECT_FALSE(summary.at("outputs").contains("camera_trajectory"));
+  EXPECT_EQ(summary.at("outputs").at("keyframe_trajectory"), "KeyFrameTrajectory.txt");
+  EXPECT_GT(pose_lines(out / "KeyFrameTrajectory.txt"), 0u);
+  EXPECT_EQ(summary.at("sequence").get<std::string>(), "caf\xef\xbf\xbd");
+  EXPECT_FALSE(fs::exists(out / "CameraTrajectory.txt.partial"));
+}
+
+// A run into a folder that holds an earlier run's outputs removes the files that run's summary
+// listed (here an evaluation and a map this run does not write), and nothing outside the folder.
+TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 3));
+  const MemoryDataset dataset(*source);
+  const fs::path root = fs::path(::testing::TempDir()) / "sequence_runner_earlier";
+  fs::remove_all(root);
+  const fs::path out = root / "run";
+  fs::create_directories(out / "eval");
+  for (const fs::path& f :
+       {out / "eval" / "eval.json", out / "map.ot", out / "notes.txt", root / "outside.txt"}) {
+    std::ofstream(f) << "earlier";
+  }
+  std::ofstream(out / "summary.json")
+      << nlohmann::json{{"outputs",
+                         {{"map", {"map.ot"}},
+                          {"evaluation", {"eval/eval.json"}},
+                          {"other", {"../outside.txt", (root / "outside.txt").string()}}}}}
+             .dump();
+  RunOptions options;
+  options.output_dir = out.string();
+  options.evaluate = false;
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  run_sequence(dataset, system, options);
+  EXPECT_FALSE(fs::exists(out / "eval" / "eval.json"));
+  EXPECT_FALSE(fs::exists(out / "map.ot"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt")) << "not listed, not ours";
+  EXPECT_TRUE(fs::exists(root / "outside.txt")) << "outside the folder";
+  std::ifstream file(out / "summary.json");
+  EXPECT_FALSE(nlohmann::json::parse(file).at("outputs").contains("evaluation"));
 }
 
 TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {

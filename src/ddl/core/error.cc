@@ -12,6 +12,10 @@ InputError InputError::at_line(const std::string& file, std::size_t line, const 
   return InputError(fmt::format("{}:{}: {}", file, line, what));
 }
 
+OutputError OutputError::at(const std::string& file, const std::string& what) {
+  return OutputError(fmt::format("{}: {}", file, what));
+}
+
 ConfigError ConfigError::for_key(const std::string& key, const std::string& what) {
   return ConfigError(fmt::format("configuration key '{}': {}", key, what));
 }

@@ -24,6 +24,14 @@ class InputError : public Error {
   static InputError at_line(const std::string& file, std::size_t line, const std::string& what);
 };
 
+/// An output file could not be written (no space, no permission, an I/O error). The message
+/// names the file and what it was for.
+class OutputError : public Error {
+ public:
+  using Error::Error;
+  static OutputError at(const std::string& file, const std::string& what);
+};
+
 /// A configuration key is unknown or holds an invalid value. The message names the key.
 class ConfigError : public Error {
  public:

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <fstream>
 #include <system_error>
 
 #include "ddl/core/error.h"
@@ -20,6 +21,44 @@ void create_folder(const std::filesystem::path& folder, std::string_view what) {
 
 void create_parent_folder(const std::filesystem::path& file, std::string_view what) {
   if (file.has_parent_path()) create_folder(file.parent_path(), what);
+}
+
+void write_file_atomically(const std::filesystem::path& file, std::string_view what,
+                           const std::function<bool(std::ostream&)>& write, bool binary) {
+  create_parent_folder(file, what);
+  // A device or a pipe (/dev/stdout, /dev/full, a FIFO) is written into, never replaced; so is a
+  // symbolic link's target (renaming would replace the link).
+  std::error_code status_error;
+  const auto status = std::filesystem::symlink_status(file, status_error);
+  const bool special = std::filesystem::exists(status) &&
+                       !std::filesystem::is_regular_file(status) &&
+                       !std::filesystem::is_directory(status);
+  std::filesystem::path partial = file;
+  if (!special) partial += ".partial";
+  const auto fail = [&](const std::string& why) {
+    std::error_code ignored;
+    if (!special) std::filesystem::remove(partial, ignored);
+    return OutputError::at(file.string(), fmt::format("cannot write {}: {}", what, why));
+  };
+  {
+    std::ofstream out(partial, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
+    if (!out) throw fail("cannot open " + partial.string());
+    bool ok = false;
+    try {
+      ok = write(out);
+    } catch (...) {
+      out.close();
+      std::error_code ignored;
+      if (!special) std::filesystem::remove(partial, ignored);
+      throw;
+    }
+    out.close();  // flushes: a small file's write error shows only here
+    if (!ok || out.fail()) throw fail("write failed (disk full?)");
+  }
+  if (special) return;
+  std::error_code ec;
+  std::filesystem::rename(partial, file, ec);
+  if (ec) throw fail("cannot rename " + partial.string() + ": " + ec.message());
 }
 
 }  // namespace ddl

@@ -165,12 +165,11 @@ json to_json(const EvalResult& r) {
 }
 
 void write_json_report(const std::string& path, const EvalResult& result) {
-  create_parent_folder(path, "the evaluation report");
-  std::ofstream file(path, std::ios::trunc);
-  if (!file) throw InputError::at(path, "cannot open for writing");
-  file << to_json(result).dump(1) << '\n';
-  file.flush();
-  if (!file) throw InputError::at(path, "write failed (disk full?)");
+  const std::string text = to_json(result).dump(1, ' ', false, json::error_handler_t::replace);
+  write_file_atomically(path, "the evaluation report", [&](std::ostream& file) {
+    file << text << '\n';
+    return true;
+  });
 }
 
 }  // namespace ddl::eval

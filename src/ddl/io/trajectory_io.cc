@@ -69,17 +69,15 @@ Trajectory read_tum_trajectory(const std::string& path) {
 
 void write_tum_trajectory(const std::string& path, const Trajectory& trajectory,
                           const std::string& header_comment) {
-  create_parent_folder(path, "the trajectory");
-  std::ofstream file(path, std::ios::trunc);
-  if (!file) throw InputError::at(path, "cannot open for writing");
-  if (!header_comment.empty()) file << "# " << header_comment << '\n';
-  file << "# timestamp tx ty tz qx qy qz qw\n";
-  for (const StampedPose& s : trajectory) {
-    file << fmt::format("{} {} {} {} {} {} {} {}\n", s.timestamp_s, s.t_w_c.x(), s.t_w_c.y(),
-                        s.t_w_c.z(), s.q_xyzw[0], s.q_xyzw[1], s.q_xyzw[2], s.q_xyzw[3]);
-  }
-  file.flush();
-  if (!file) throw InputError::at(path, "write failed (disk full?)");
+  write_file_atomically(path, "the trajectory", [&](std::ostream& file) {
+    if (!header_comment.empty()) file << "# " << header_comment << '\n';
+    file << "# timestamp tx ty tz qx qy qz qw\n";
+    for (const StampedPose& s : trajectory) {
+      file << fmt::format("{} {} {} {} {} {} {} {}\n", s.timestamp_s, s.t_w_c.x(), s.t_w_c.y(),
+                          s.t_w_c.z(), s.q_xyzw[0], s.q_xyzw[1], s.q_xyzw[2], s.q_xyzw[3]);
+    }
+    return true;
+  });
 }
 
 }  // namespace ddl::io

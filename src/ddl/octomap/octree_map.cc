@@ -15,6 +15,7 @@
 #include <unordered_map>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/core/timing.h"
 
 namespace ddl::octomap {
@@ -148,14 +149,13 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
 namespace {
 
 // OctoMap's write(filename) reports success whatever the stream did (a full disk included), so
-// the files are written through our own stream and checked after it is closed.
+// the files are written through our own stream, checked after it is closed, and renamed into
+// place (core/filesystem.h): an interrupted write leaves no half-written octree, which OctoMap
+// would read without complaint.
 template <typename WriteFn>
 void write_checked(const std::string& path, const char* what, WriteFn&& write) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw Error(fmt::format("{}: cannot open for writing", path));
-  const bool ok = write(file);
-  file.close();
-  if (!ok || !file) throw Error(fmt::format("{}: cannot write the {}", path, what));
+  write_file_atomically(
+      path, what, [&](std::ostream& out) { return write(out); }, true);
 }
 
 }  // namespace
@@ -185,18 +185,17 @@ void OctreeMap::write_ply(const std::string& path) const {
   for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
     if (tree_->isNodeOccupied(*it)) voxels.emplace_back(it.getCoordinate(), it->getColor());
   }
-  std::ofstream file(path);
-  if (!file) throw Error(fmt::format("{}: cannot open for writing", path));
-  file << "ply\nformat ascii 1.0\ncomment DDL-SLAM occupied voxel centres\n"
-       << "element vertex " << voxels.size() << "\n"
-       << "property float x\nproperty float y\nproperty float z\n"
-       << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-  for (const auto& [p, c] : voxels) {
-    file << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << int(c.r) << ' ' << int(c.g) << ' '
-         << int(c.b) << '\n';
-  }
-  file.close();  // flushes: a small file's write error shows only here
-  if (!file) throw Error(fmt::format("{}: write failed", path));
+  write_file_atomically(path, "the voxel point cloud", [&](std::ostream& file) {
+    file << "ply\nformat ascii 1.0\ncomment DDL-SLAM occupied voxel centres\n"
+         << "element vertex " << voxels.size() << "\n"
+         << "property float x\nproperty float y\nproperty float z\n"
+         << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+    for (const auto& [p, c] : voxels) {
+      file << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << int(c.r) << ' ' << int(c.g) << ' '
+           << int(c.b) << '\n';
+    }
+    return true;
+  });
 }
 
 cv::Mat OctreeMap::render(bool oblique, int up_axis, int width, int height) const {

@@ -24,6 +24,26 @@
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
 
+namespace {
+
+/// A PNG written whole or not at all (core/filesystem.h); OutputError naming it otherwise.
+void write_png(const fs::path& path, const cv::Mat& image, std::string_view what) {
+  std::vector<unsigned char> bytes;
+  if (!cv::imencode(".png", image, bytes)) {
+    throw OutputError::at(path.string(), fmt::format("cannot encode {}", what));
+  }
+  write_file_atomically(
+      path, what,
+      [&](std::ostream& out) {
+        out.write(reinterpret_cast<const char*>(bytes.data()),
+                  static_cast<std::streamsize>(bytes.size()));
+        return true;
+      },
+      true);
+}
+
+}  // namespace
+
 void DenseMapperConfig::validate() const {
   if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
   if (thread_nice < 0 || thread_nice > 19) {
@@ -324,8 +344,8 @@ std::vector<std::string> DenseMapper::write_outputs(const std::string& dir) cons
   octree_->write_ply((d / "map.ply").string());
   // The map lives in the SLAM world frame, the first camera's (y points down, roughly
   // "up" reversed), so the top view looks along y.
-  cv::imwrite((d / "map_top.png").string(), octree_->render(false, 1));
-  cv::imwrite((d / "map_oblique.png").string(), octree_->render(true, 1));
+  write_png(d / "map_top.png", octree_->render(false, 1), "the map's top view");
+  write_png(d / "map_oblique.png", octree_->render(true, 1), "the map's oblique view");
   for (const char* f : {"map.ot", "map.bt", "map.ply", "map_top.png", "map_oblique.png"}) {
     written.push_back((d / f).string());
   }

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
@@ -33,10 +34,43 @@ nlohmann::json timings_to_json(const TimingStats& timings) {
 
 namespace {
 
+/// Removes the files an earlier run listed under "outputs" in `out_dir`/summary.json, so that a
+/// shorter, interrupted or unevaluated run into the same folder leaves none of them behind (its
+/// eval/ report and plots, its maps). Only names inside the folder are touched; an unreadable or
+/// malformed summary removes nothing.
+void remove_earlier_outputs(const fs::path& out_dir) {
+  std::ifstream file(out_dir / "summary.json");
+  if (!file) return;
+  const nlohmann::json summary = nlohmann::json::parse(file, nullptr, false);
+  if (summary.is_discarded() || !summary.contains("outputs")) return;
+  std::vector<std::string> names;
+  const std::function<void(const nlohmann::json&)> collect = [&](const nlohmann::json& j) {
+    if (j.is_string()) names.push_back(j.get<std::string>());
+    if (j.is_array() || j.is_object()) {
+      for (const nlohmann::json& item : j) collect(item);
+    }
+  };
+  collect(summary["outputs"]);
+  for (const std::string& name : names) {
+    const fs::path relative(name);
+    if (relative.empty() || relative.is_absolute()) continue;
+    bool inside = true;
+    for (const fs::path& part : relative) inside = inside && part != "..";
+    std::error_code ec;
+    if (inside && fs::is_regular_file(out_dir / relative, ec)) fs::remove(out_dir / relative, ec);
+  }
+  std::error_code ec;
+  fs::remove(out_dir / "summary.json", ec);  // it described them
+}
+
+/// Whole or not at all (core/filesystem.h); text that is not UTF-8 (a sequence folder's name, a
+/// path in an error message) is written with U+FFFD in place of its bad bytes, not refused.
 void write_json(const fs::path& path, const nlohmann::json& json) {
-  std::ofstream file(path);
-  if (!file) throw InputError::at(path.string(), "cannot open for writing");
-  file << json.dump(2) << '\n';
+  const std::string text = json.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  write_file_atomically(path, "the run's summary", [&](std::ostream& file) {
+    file << text << '\n';
+    return true;
+  });
 }
 
 nlohmann::json statistics_to_json(const SystemStatistics& s) {
@@ -82,6 +116,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   }
   const fs::path out_dir(options.output_dir);
   create_folder(out_dir, "the run's outputs");
+  remove_earlier_outputs(out_dir);
 
   if (options.first_frame > 0 && options.first_frame >= dataset.size()) {
     throw ConfigError::for_key("first_frame (--first-frame)",
@@ -173,21 +208,34 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   if (input_done_s <= 0.0) input_done_s = wall_s;
   const double process_cpu_s = (process_cpu_ms() - process_cpu_start_ms) / 1000.0;
 
-  // Outputs first, so that nothing computed is lost, then the error (if any) propagates.
+  // Outputs first, so that nothing computed is lost, then the error (if any) propagates. An
+  // output that cannot be written does not stop the others or summary.json (which lists it under
+  // output_errors); the run then fails with the first such error, after the frame error if any.
+  std::vector<std::string> output_errors;
+  const auto write_output = [&](const std::function<void()>& write) {
+    try {
+      write();
+      return true;
+    } catch (const Error& e) {
+      spdlog::error("{}", e.what());
+      output_errors.push_back(e.what());
+      return false;
+    }
+  };
   const fs::path camera_path = out_dir / "CameraTrajectory.txt";
   const fs::path keyframe_path = out_dir / "KeyFrameTrajectory.txt";
-  io::write_tum_trajectory(camera_path.string(), system.camera_trajectory(),
-                           "DDL-SLAM camera trajectory (T_w_c) of " + dataset.name());
-  io::write_tum_trajectory(keyframe_path.string(), system.keyframe_trajectory(),
-                           "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
+  const bool camera_written = write_output([&] {
+    io::write_tum_trajectory(camera_path.string(), system.camera_trajectory(),
+                             "DDL-SLAM camera trajectory (T_w_c) of " + dataset.name());
+  });
+  const bool keyframes_written = write_output([&] {
+    io::write_tum_trajectory(keyframe_path.string(), system.keyframe_trajectory(),
+                             "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
+  });
 
   outcome.statistics = system.statistics();
   std::vector<std::string> map_files;
-  try {
-    map_files = system.dense_mapper().write_outputs(out_dir.string());
-  } catch (const Error& e) {
-    spdlog::error("writing the octree map failed: {}", e.what());
-  }
+  write_output([&] { map_files = system.dense_mapper().write_outputs(out_dir.string()); });
   nlohmann::json& summary = outcome.summary;
   summary["sequence"] = dataset.name();
   summary["frames_in_sequence"] = dataset.size();
@@ -195,7 +243,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["interrupted"] = outcome.interrupted;
   summary["playback_rate"] = pacer ? nlohmann::json(options.playback_rate) : nlohmann::json();
   summary["frames_dropped"] = dropped;
-  summary["failed"] = error != nullptr;
+  summary["failed"] = error != nullptr || !output_errors.empty();
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
   // The tracking rate: frames over the time until the last frame was tracked, before the
@@ -218,11 +266,14 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     summary["outputs"]["map"].push_back(fs::path(f).filename().string());
   }
   if (masks != nullptr) summary["masks"] = masks->to_json();
-  summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
-  summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
+  if (camera_written) summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
+  if (keyframes_written) {
+    summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
+  }
 
   const auto gt = dataset.groundtruth_path();
-  if (options.evaluate && gt && error == nullptr && outcome.statistics.frames_tracked >= 2) {
+  if (options.evaluate && gt && error == nullptr && camera_written &&
+      outcome.statistics.frames_tracked >= 2) {
     // A malformed ground-truth file is bad input: the run ends with its error (exit code 2)
     // once summary.json is written. Failing to evaluate a run that is too short or too far from
     // the ground truth only skips the evaluation (below).
@@ -241,7 +292,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
         const fs::path eval_dir = out_dir / "eval";
         create_folder(eval_dir, "the evaluation");
         eval::write_json_report((eval_dir / "eval.json").string(), result);
-        eval::write_eval_plots(result, eval_dir.string());
+        summary["outputs"]["evaluation"].push_back("eval/eval.json");
+        for (const std::string& plot : eval::write_eval_plots(result, eval_dir.string())) {
+          summary["outputs"]["evaluation"].push_back("eval/" + fs::path(plot).filename().string());
+        }
         nlohmann::json ev = eval::to_json(result);
         // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
         // processed frames inside the ground-truth span, those with an estimated pose. Until
@@ -260,8 +314,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       }
     }
   }
+  if (!output_errors.empty()) summary["output_errors"] = output_errors;
   write_json(out_dir / "summary.json", summary);
   if (error) std::rethrow_exception(error);
+  if (!output_errors.empty()) throw OutputError(output_errors.front());
   return outcome;
 }
 
