@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "ddl/map/map.h"
 #include "ddl/synthetic/sequence.h"
@@ -51,6 +52,38 @@ TEST(DenseMapper, LeavesTheSubmittedImagesAndMaskUntouched) {
     dense.finish();
     EXPECT_EQ(dense.stats().keyframes, 3u);
   }
+}
+
+// A map file that cannot be written (a folder stands in map.ot's place) does not stop the others:
+// its error is returned, the rest are written whole and listed.
+TEST(DenseMapper, AMapFileThatCannotBeWrittenDoesNotStopTheOthers) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  auto map = std::make_shared<map::Map>();
+  DenseMapperConfig config;
+  config.octomap_enabled = true;
+  config.octree_delay_keyframes = 0;
+  DenseMapper dense(config, camera, map);
+  auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), 0,
+                                            std::make_shared<map::FrameFeatures>(), SE3());
+  map->add_keyframe(kf);
+  const cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40, 80, 120));
+  const cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+  dense.submit({kf, bgr, depth, cv::Mat::zeros(camera.height, camera.width, CV_8UC1)});
+  dense.finish();
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "dense_mapper_outputs";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "map.ot");
+  std::vector<std::string> errors;
+  const std::vector<std::string> written = dense.write_outputs(dir.string(), errors);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("map.ot"), std::string::npos) << errors[0];
+  ASSERT_EQ(written.size(), 4u);
+  for (const std::string& f : written) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(f)) << f;
+    EXPECT_GT(std::filesystem::file_size(f), 0u) << f;
+  }
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "map.ot"));
 }
 
 // A map reset (tracking lost while the map was young) starts a new world frame: the keyframes

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -334,21 +335,32 @@ void DenseMapper::rebuild_octree(std::size_t keep_back) {
   ++stats_.octree_rebuilds;
 }
 
-std::vector<std::string> DenseMapper::write_outputs(const std::string& dir) const {
+std::vector<std::string> DenseMapper::write_outputs(const std::string& dir,
+                                                    std::vector<std::string>& errors) const {
   std::vector<std::string> written;
   if (!octree_) return written;
   create_folder(dir, "the octree map");
   const fs::path d(dir);
-  octree_->write_ot((d / "map.ot").string());
-  octree_->write_bt((d / "map.bt").string());
-  octree_->write_ply((d / "map.ply").string());
+  const auto write = [&](const char* name, const std::function<void(const std::string&)>& fn) {
+    const std::string path = (d / name).string();
+    try {
+      fn(path);
+      written.push_back(path);
+    } catch (const Error& e) {
+      errors.push_back(e.what());
+    }
+  };
+  write("map.ot", [&](const std::string& p) { octree_->write_ot(p); });
+  write("map.bt", [&](const std::string& p) { octree_->write_bt(p); });
+  write("map.ply", [&](const std::string& p) { octree_->write_ply(p); });
   // The map lives in the SLAM world frame, the first camera's (y points down, roughly
   // "up" reversed), so the top view looks along y.
-  write_png(d / "map_top.png", octree_->render(false, 1), "the map's top view");
-  write_png(d / "map_oblique.png", octree_->render(true, 1), "the map's oblique view");
-  for (const char* f : {"map.ot", "map.bt", "map.ply", "map_top.png", "map_oblique.png"}) {
-    written.push_back((d / f).string());
-  }
+  write("map_top.png", [&](const std::string& p) {
+    write_png(p, octree_->render(false, 1), "the map's top view");
+  });
+  write("map_oblique.png", [&](const std::string& p) {
+    write_png(p, octree_->render(true, 1), "the map's oblique view");
+  });
   return written;
 }
 

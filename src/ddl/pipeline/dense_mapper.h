@@ -86,8 +86,12 @@ class DenseMapper {
   /// Drains the queue, joins the thread, rebuilds the octree once more if poses moved since
   /// (a big change, or any keyframe moved by more than a quarter voxel).
   void finish();
-  /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`.
-  std::vector<std::string> write_outputs(const std::string& dir) const;
+  /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`, each whole or
+  /// not at all (core/filesystem.h), and returns the paths written. A file that cannot be written
+  /// does not stop the others: its error message is appended to `errors`. Throws InputError when
+  /// `dir` cannot be created.
+  std::vector<std::string> write_outputs(const std::string& dir,
+                                         std::vector<std::string>& errors) const;
 
   DenseStats stats() const;
   const TimingStats& timings() const { return timings_; }

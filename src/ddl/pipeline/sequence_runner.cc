@@ -235,7 +235,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
 
   outcome.statistics = system.statistics();
   std::vector<std::string> map_files;
-  write_output([&] { map_files = system.dense_mapper().write_outputs(out_dir.string()); });
+  write_output([&] {
+    std::vector<std::string> errors;
+    map_files = system.dense_mapper().write_outputs(out_dir.string(), errors);
+    for (const std::string& e : errors) spdlog::error("{}", e);
+    output_errors.insert(output_errors.end(), errors.begin(), errors.end());
+  });
   nlohmann::json& summary = outcome.summary;
   summary["sequence"] = dataset.name();
   summary["frames_in_sequence"] = dataset.size();
