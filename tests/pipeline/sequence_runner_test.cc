@@ -40,6 +40,11 @@ class MemoryDataset final : public io::DatasetReader {
   std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
   std::string name() const override { return name_; }
   void set_name(const std::string& name) { name_ = name; }
+  /// Frame i as a covered sensor shows it: black, no depth.
+  void blank(std::size_t i) {
+    frames_.at(i).rgb.setTo(cv::Scalar::all(0));
+    frames_.at(i).depth_m.setTo(0.0f);
+  }
   cv::Mat source_area() const override { return source_area_; }
   void set_source_area(const cv::Mat& area) { source_area_ = area; }
 
@@ -176,6 +181,25 @@ TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
   EXPECT_TRUE(fs::exists(root / "outside.txt")) << "outside the folder";
   std::ifstream file(out / "summary.json");
   EXPECT_FALSE(nlohmann::json::parse(file).at("outputs").contains("evaluation"));
+}
+
+// Tracking lost while the map is young resets it, which drops the poses before the reset: the
+// summary's `poses` counts what the trajectory holds, `frames_tracked` what was tracked.
+TEST(SequenceRunner, ThePosesCountTheTrajectoryAfterAMapReset) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 24));
+  MemoryDataset dataset(*source);
+  for (std::size_t i = 8; i < 12; ++i) dataset.blank(i);
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_reset";
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  const RunOutcome outcome = run_sequence(dataset, system, fresh_run_options(out));
+  ASSERT_GE(outcome.statistics.map_resets, 1u);
+  EXPECT_EQ(outcome.statistics.poses, pose_lines(out / "CameraTrajectory.txt"));
+  EXPECT_LT(outcome.statistics.poses, outcome.statistics.frames_tracked);
+  std::ifstream file(out / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(file).at("statistics").at("poses").get<std::size_t>(),
+            outcome.statistics.poses);
 }
 
 TEST(SequenceRunner, TheSummaryTimesLocalMappingStageByStage) {

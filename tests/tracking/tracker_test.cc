@@ -219,6 +219,27 @@ io::RgbdFrame blank_frame(std::size_t index, double stamp) {
   return f;
 }
 
+// Only keypoints with depth become map points, so a frame whose depth is missing (a dropout, the
+// sensor covered) does not start the map: it would start an empty one that the next frame cannot
+// track. The first frame with depth does.
+TEST(TrackerTest, AFrameWithoutDepthDoesNotStartTheMap) {
+  auto map = std::make_shared<map::Map>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), nullptr);
+  io::RgbdFrame no_depth = room_sequence().frames[0];
+  no_depth.depth_m = cv::Mat(no_depth.depth_m.size(), CV_32F, cv::Scalar(0.0f));
+  const TrackingResult first = tracker.track(tracker.prepare_frame(no_depth, cv::Mat()), {});
+  ASSERT_GT(first.num_features, 500u) << "the frame has keypoints, only no depth";
+  EXPECT_FALSE(first.tracked());
+  EXPECT_EQ(tracker.state(), TrackingState::kNotInitialized);
+  EXPECT_EQ(map->keyframe_count(), 0u);
+  const TrackingResult second =
+      tracker.track(tracker.prepare_frame(room_sequence().frames[1], cv::Mat()), {});
+  EXPECT_TRUE(second.tracked());
+  EXPECT_EQ(second.method, TrackingMethod::kInitialization);
+  EXPECT_GT(map->map_point_count(), 100u);
+}
+
 TEST(TrackerTest, RelocalizesAfterBlankFrames) {
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();

@@ -66,10 +66,17 @@ double as_double(const json& v) { return v.is_number() ? v.get<double>() : kNaN;
 
 json tracking_entry(const json& summary) {
   if (!summary.is_object()) return nullptr;
+  // Frames with a pose in the trajectory, which the ratio beside it also counts; a map reset
+  // drops the poses before it ("poses"). Summaries written before 2026-11-27 have only the
+  // frames tracked when they were processed.
+  json tracked = nullptr;
+  if (summary.contains("/statistics/poses"_json_pointer)) {
+    tracked = summary["statistics"]["poses"];
+  } else if (summary.contains("/statistics/frames_tracked"_json_pointer)) {
+    tracked = summary["statistics"]["frames_tracked"];
+  }
   return {{"frames_processed", summary.value("frames_processed", json(nullptr))},
-          {"frames_tracked", summary.contains("/statistics/frames_tracked"_json_pointer)
-                                 ? summary["statistics"]["frames_tracked"]
-                                 : json(nullptr)},
+          {"frames_tracked", tracked},
           {"frames_lost", summary.contains("/statistics/frames_lost"_json_pointer)
                               ? summary["statistics"]["frames_lost"]
                               : json(nullptr)},

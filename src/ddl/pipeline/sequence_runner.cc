@@ -76,6 +76,7 @@ void write_json(const fs::path& path, const nlohmann::json& json) {
 nlohmann::json statistics_to_json(const SystemStatistics& s) {
   return {{"frames", s.frames},
           {"frames_tracked", s.frames_tracked},
+          {"poses", s.poses},
           {"frames_lost", s.frames_lost},
           {"relocalizations", s.relocalizations},
           {"keyframes_created", s.keyframes_created},
@@ -278,7 +279,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
 
   const auto gt = dataset.groundtruth_path();
   if (options.evaluate && gt && error == nullptr && camera_written &&
-      outcome.statistics.frames_tracked >= 2) {
+      outcome.statistics.poses >= 2) {
     // A malformed ground-truth file is bad input: the run ends with its error (exit code 2)
     // once summary.json is written. Failing to evaluate a run that is too short or too far from
     // the ground truth only skips the evaluation (below).

@@ -405,6 +405,7 @@ io::Trajectory System::keyframe_trajectory() const {
 
 SystemStatistics System::statistics() const {
   SystemStatistics s = stats_;
+  s.poses = tracker_->frames_tracked();  // the camera trajectory's poses
   s.keyframes = map_->keyframe_count();
   s.map_points = map_->map_point_count();
   s.loops_closed = loop_closer_->loops_closed();

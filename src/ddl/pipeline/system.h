@@ -55,7 +55,8 @@ namespace ddl::pipeline {
 /// Counters for the run summary.
 struct SystemStatistics {
   std::size_t frames = 0;
-  std::size_t frames_tracked = 0;
+  std::size_t frames_tracked = 0;  // tracked when processed (a later map reset drops their poses)
+  std::size_t poses = 0;           // poses in the camera trajectory at the end
   std::size_t frames_lost = 0;
   std::size_t relocalizations = 0;
   std::size_t keyframes_created = 0;

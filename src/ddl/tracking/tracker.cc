@@ -281,6 +281,11 @@ bool Tracker::estimate_initial_pose(Frame& frame, TrackingMethod& method) {
 
 bool Tracker::initialize(Frame& frame, TrackingResult& result) {
   if (frame.size() <= static_cast<std::size_t>(config_.init_min_features)) return false;
+  // Only keypoints with depth become map points: a frame without depth (a dropout, the sensor
+  // covered) would start an empty map that the next frame cannot track, and a reset.
+  std::size_t with_depth = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) with_depth += frame.has_depth(i) ? 1 : 0;
+  if (with_depth < static_cast<std::size_t>(config_.init_min_depth_features)) return false;
   frame.set_T_c_w(SE3());
   map::KeyFramePtr keyframe =
       create_initial_keyframe(frame, *map_, *vocabulary_, config_.frame.bow_levels_up);

@@ -114,6 +114,7 @@ void TrackerConfig::validate() const {
   validate_keyframes(keyframes);
   validate_relocalization(relocalization);
   require_count(init_min_features, 0, 1000000, "tracking.init_min_features");
+  require_count(init_min_depth_features, 0, 1000000, "tracking.init_min_depth_features");
   require(reset_when_lost_max_keyframes >= -1, "tracking.reset_when_lost_max_keyframes",
           reset_when_lost_max_keyframes, "must be >= -1");
 }

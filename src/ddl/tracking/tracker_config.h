@@ -83,6 +83,7 @@ struct TrackerConfig {
   RelocalizationConfig relocalization;      // recovery after tracking loss
   optimization::OptimizerConfig optimizer;  // motion-only BA schedule (pose_* fields)
   int init_min_features = 500;              // the first frame needs more keypoints than this
+  int init_min_depth_features = 100;        // ... and this many of them with depth (map points)
   int reset_when_lost_max_keyframes = 5;    // lost with <= this many keyframes: reset the map
                                             // (-1: never reset)
 
