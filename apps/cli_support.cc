@@ -22,8 +22,8 @@ extern "C" void on_signal(int) {
   if (g_stop_requested.exchange(true)) {
     // Only async-signal-safe calls here: write(2) and _Exit.
     constexpr char kQuit[] =
-        "\nsecond interrupt: exiting at once; the outputs of this run are NOT saved (files in the "
-        "output folder may be from an earlier run)\n";
+        "\nsecond interrupt: exiting at once; the outputs of this run are NOT saved (each file in "
+        "the output folder is whole: from this run, from an earlier one, or missing)\n";
     [[maybe_unused]] auto n = write(STDERR_FILENO, kQuit, sizeof(kQuit) - 1);
     std::_Exit(kInterrupted);
   }

@@ -146,7 +146,8 @@ int bench(const BenchArgs& args) {
   std::vector<eval::BenchmarkRow> rows;
   auto write_tables = [&] {
     const json tables = eval::benchmark_tables(rows, settings, skipped);
-    write_text(out_dir / "tables.json", tables.dump(2) + "\n");
+    write_text(out_dir / "tables.json",
+               tables.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
     write_text(out_dir / "tables.md", eval::benchmark_tables_markdown(tables));
   };
 

@@ -65,7 +65,8 @@ int run_eval_dense(const EvalDenseArgs& args) {
   if (!args.json_path.empty()) {
     create_parent_folder(args.json_path, "the JSON report");
     std::ofstream file(args.json_path);
-    file << eval::to_json(result).dump(2) << '\n';
+    file << eval::to_json(result).dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
+         << '\n';
     if (!file) throw InputError::at(args.json_path, "cannot write");
     spdlog::info("wrote {}", args.json_path);
   }

@@ -15,6 +15,7 @@
 
 #include "ddl/core/error.h"
 #include "ddl/io/dataset_reader.h"
+#include "ddl/io/trajectory_io.h"
 #include "ddl/pipeline/frame_pacer.h"
 #include "ddl/pipeline/system.h"
 #include "pipeline_test_support.h"
@@ -37,7 +38,8 @@ class MemoryDataset final : public io::DatasetReader {
   double timestamp(std::size_t i) const override { return frames_.at(i).timestamp_s; }
   io::RgbdFrame frame(std::size_t i) const override { return frames_.at(i); }
   const camera::PinholeCamera& camera() const override { return camera_; }
-  std::optional<std::string> groundtruth_path() const override { return std::nullopt; }
+  std::optional<std::string> groundtruth_path() const override { return groundtruth_path_; }
+  void set_groundtruth_path(const std::string& path) { groundtruth_path_ = path; }
   std::string name() const override { return name_; }
   void set_name(const std::string& name) { name_ = name; }
   /// Frame i as a covered sensor shows it: black, no depth.
@@ -53,6 +55,7 @@ class MemoryDataset final : public io::DatasetReader {
   std::vector<io::RgbdFrame> frames_;
   cv::Mat source_area_;
   std::string name_ = "memory";
+  std::optional<std::string> groundtruth_path_;
 };
 
 std::size_t pose_lines(const fs::path& trajectory) {
@@ -164,23 +167,61 @@ TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
        {out / "eval" / "eval.json", out / "map.ot", out / "notes.txt", root / "outside.txt"}) {
     std::ofstream(f) << "earlier";
   }
+  // A listed symbolic link stays a link; the new run writes into its target.
+  std::ofstream(root / "kept_trajectory.txt") << "earlier";
+  fs::create_symlink(root / "kept_trajectory.txt", out / "CameraTrajectory.txt");
   std::ofstream(out / "summary.json")
       << nlohmann::json{{"outputs",
                          {{"map", {"map.ot"}},
                           {"evaluation", {"eval/eval.json"}},
+                          {"camera_trajectory", "CameraTrajectory.txt"},
                           {"other", {"../outside.txt", (root / "outside.txt").string()}}}}}
              .dump();
   RunOptions options;
   options.output_dir = out.string();
   options.evaluate = false;
   System system(testing::core_config(), dataset.camera(), vocabulary);
+  // A bad option ends the run before it starts: the earlier outputs stay.
+  options.first_frame = 100;
+  EXPECT_THROW(run_sequence(dataset, system, options), ConfigError);
+  EXPECT_TRUE(fs::exists(out / "map.ot"));
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  options.first_frame = 0;
   run_sequence(dataset, system, options);
   EXPECT_FALSE(fs::exists(out / "eval" / "eval.json"));
   EXPECT_FALSE(fs::exists(out / "map.ot"));
   EXPECT_TRUE(fs::exists(out / "notes.txt")) << "not listed, not ours";
   EXPECT_TRUE(fs::exists(root / "outside.txt")) << "outside the folder";
+  EXPECT_TRUE(fs::is_symlink(out / "CameraTrajectory.txt"));
+  EXPECT_EQ(pose_lines(root / "kept_trajectory.txt"), 3u);
   std::ifstream file(out / "summary.json");
   EXPECT_FALSE(nlohmann::json::parse(file).at("outputs").contains("evaluation"));
+}
+
+// The evaluation's report is an output too: failing to write it fails the run (exit code 1), and
+// the evaluation itself is still in summary.json.
+TEST(SequenceRunner, AnEvaluationReportThatCannotBeWrittenFailsTheRun) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_static_xyz", 45));
+  MemoryDataset dataset(*source);
+  const fs::path root = fs::path(::testing::TempDir()) / "sequence_runner_eval_output";
+  fs::remove_all(root);
+  io::write_tum_trajectory((root / "groundtruth.txt").string(), source->groundtruth());
+  dataset.set_groundtruth_path((root / "groundtruth.txt").string());
+  const fs::path out = root / "run";
+  fs::create_directories(out / "eval" / "eval.json");  // a folder in the report's place
+  RunOptions options;
+  options.output_dir = out.string();
+  System system(testing::core_config(), dataset.camera(), vocabulary);
+  EXPECT_THROW(run_sequence(dataset, system, options), OutputError);
+  std::ifstream file(out / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(file);
+  EXPECT_TRUE(summary.at("failed").get<bool>());
+  ASSERT_EQ(summary.at("output_errors").size(), 1u);
+  EXPECT_NE(summary["output_errors"][0].get<std::string>().find("eval.json"), std::string::npos);
+  EXPECT_TRUE(summary.contains("evaluation"));
+  EXPECT_EQ(summary.at("outputs").at("evaluation").size(), 6u) << "the six plots";
 }
 
 // Tracking lost while the map is young resets it, which drops the poses before the reset: the

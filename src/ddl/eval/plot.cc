@@ -446,18 +446,27 @@ std::vector<std::string> write_figure(const Figure& figure, const std::string& s
   create_parent_folder(stem, "the plots");
   const std::string png = stem + ".png";
   const std::string svg = stem + ".svg";
+  std::vector<unsigned char> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(png, render_png_image(figure));
+    ok = cv::imencode(".png", render_png_image(figure), bytes);
   } catch (const cv::Exception& e) {
-    throw InputError::at(png, fmt::format("cannot write image: {}", e.what()));
+    throw OutputError::at(png, fmt::format("cannot encode the plot: {}", e.what()));
   }
-  if (!ok) throw InputError::at(png, "cannot write image");
-  std::ofstream file(svg, std::ios::trunc);
-  if (!file) throw InputError::at(svg, "cannot open for writing");
-  file << render_svg(figure);
-  file.flush();
-  if (!file) throw InputError::at(svg, "write failed (disk full?)");
+  if (!ok) throw OutputError::at(png, "cannot encode the plot");
+  write_file_atomically(
+      png, "the plot",
+      [&](std::ostream& out) {
+        out.write(reinterpret_cast<const char*>(bytes.data()),
+                  static_cast<std::streamsize>(bytes.size()));
+        return true;
+      },
+      true);
+  const std::string text = render_svg(figure);
+  write_file_atomically(svg, "the plot", [&](std::ostream& out) {
+    out << text;
+    return true;
+  });
   return {png, svg};
 }
 

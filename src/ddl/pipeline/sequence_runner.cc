@@ -39,6 +39,13 @@ namespace {
 /// eval/ report and plots, its maps). Only names inside the folder are touched; an unreadable or
 /// malformed summary removes nothing.
 void remove_earlier_outputs(const fs::path& out_dir) {
+  // Only regular files are read or removed: a symbolic link stays (its target is written into),
+  // and a FIFO or device in summary.json's place is not read (it could block).
+  const auto regular = [](const fs::path& path) {
+    std::error_code ec;
+    return fs::is_regular_file(fs::symlink_status(path, ec));
+  };
+  if (!regular(out_dir / "summary.json")) return;
   std::ifstream file(out_dir / "summary.json");
   if (!file) return;
   const nlohmann::json summary = nlohmann::json::parse(file, nullptr, false);
@@ -57,7 +64,7 @@ void remove_earlier_outputs(const fs::path& out_dir) {
     bool inside = true;
     for (const fs::path& part : relative) inside = inside && part != "..";
     std::error_code ec;
-    if (inside && fs::is_regular_file(out_dir / relative, ec)) fs::remove(out_dir / relative, ec);
+    if (inside && regular(out_dir / relative)) fs::remove(out_dir / relative, ec);
   }
   std::error_code ec;
   fs::remove(out_dir / "summary.json", ec);  // it described them
@@ -117,7 +124,6 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   }
   const fs::path out_dir(options.output_dir);
   create_folder(out_dir, "the run's outputs");
-  remove_earlier_outputs(out_dir);
 
   if (options.first_frame > 0 && options.first_frame >= dataset.size()) {
     throw ConfigError::for_key("first_frame (--first-frame)",
@@ -133,6 +139,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   if (options.max_frames > 0 && options.max_frames < end - begin) end = begin + options.max_frames;
   const std::size_t total = end - begin;
 
+  // Every option is valid: from here on the run writes its outputs whatever happens.
+  remove_earlier_outputs(out_dir);
   RunOutcome outcome;
   std::exception_ptr error;
   Stopwatch wall;
@@ -295,13 +303,20 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       try {
         const eval::EvalResult result =
             eval::evaluate(*groundtruth, system.camera_trajectory(), {}, *gt, camera_path.string());
+        // The report and plots are outputs: failing to write them fails the run (output_errors),
+        // not the evaluation.
         const fs::path eval_dir = out_dir / "eval";
-        create_folder(eval_dir, "the evaluation");
-        eval::write_json_report((eval_dir / "eval.json").string(), result);
-        summary["outputs"]["evaluation"].push_back("eval/eval.json");
-        for (const std::string& plot : eval::write_eval_plots(result, eval_dir.string())) {
-          summary["outputs"]["evaluation"].push_back("eval/" + fs::path(plot).filename().string());
-        }
+        write_output([&] {
+          create_folder(eval_dir, "the evaluation");
+          eval::write_json_report((eval_dir / "eval.json").string(), result);
+          summary["outputs"]["evaluation"].push_back("eval/eval.json");
+        });
+        write_output([&] {
+          for (const std::string& plot : eval::write_eval_plots(result, eval_dir.string())) {
+            summary["outputs"]["evaluation"].push_back("eval/" +
+                                                       fs::path(plot).filename().string());
+          }
+        });
         nlohmann::json ev = eval::to_json(result);
         // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
         // processed frames inside the ground-truth span, those with an estimated pose. Until
@@ -320,7 +335,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       }
     }
   }
-  if (!output_errors.empty()) summary["output_errors"] = output_errors;
+  if (!output_errors.empty()) {  // the evaluation's files may have added some
+    summary["output_errors"] = output_errors;
+    summary["failed"] = true;
+  }
   write_json(out_dir / "summary.json", summary);
   if (error) std::rethrow_exception(error);
   if (!output_errors.empty()) throw OutputError(output_errors.front());

@@ -133,7 +133,8 @@ void write_indices(const SequenceSource& source, const fs::path& out, const List
                          "person: feet (billboard bottom centre) in the "
                          "world frame; object: box centre"}}},
                       {"frames", lists.frames}};
-  write_text((out / "meta.json").string(), meta.dump(1) + "\n");
+  write_text((out / "meta.json").string(),
+             meta.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 }  // namespace
