@@ -42,13 +42,6 @@ struct Sequence {
   std::string dir;
 };
 
-void write_text(const fs::path& path, const std::string& text) {
-  write_file_atomically(path, "the bench's tables", [&](std::ostream& file) {
-    file << text;
-    return true;
-  });
-}
-
 /// The sequences to run, validated before anything runs. Named folders must exist and hold
 /// rgb.txt and groundtruth.txt (an error otherwise); suite subfolders with rgb.txt but without
 /// groundtruth.txt are skipped with a warning, recorded in `skipped`.
@@ -146,9 +139,10 @@ int bench(const BenchArgs& args) {
   std::vector<eval::BenchmarkRow> rows;
   auto write_tables = [&] {
     const json tables = eval::benchmark_tables(rows, settings, skipped);
-    write_text(out_dir / "tables.json",
-               tables.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
-    write_text(out_dir / "tables.md", eval::benchmark_tables_markdown(tables));
+    write_file_atomically(out_dir / "tables.json", "the bench's tables",
+                          tables.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
+    write_file_atomically(out_dir / "tables.md", "the bench's tables",
+                          eval::benchmark_tables_markdown(tables));
   };
 
   bool interrupted = false;

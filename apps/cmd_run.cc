@@ -134,14 +134,10 @@ RunResult run_sequence_command(const RunArgs& args,
   if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
   create_folder(args.output_dir, "the run's outputs");
-  const auto write_text = [&](const char* name, const std::string& text, const char* what) {
-    write_file_atomically(fs::path(args.output_dir) / name, what, [&](std::ostream& file) {
-      file << text;
-      return true;
-    });
-  };
-  write_text("config.yaml", config::system_config_to_yaml(config), "the effective configuration");
-  write_text("camera.yaml", config::camera_to_yaml(dataset->camera()), "the camera of the frames");
+  write_file_atomically(fs::path(args.output_dir) / "config.yaml", "the effective configuration",
+                        config::system_config_to_yaml(config));
+  write_file_atomically(fs::path(args.output_dir) / "camera.yaml", "the camera of the frames",
+                        config::camera_to_yaml(dataset->camera()));
 
   pipeline::System system(config, dataset->camera(), vocabulary);
 

@@ -35,9 +35,12 @@ void write_file_atomically(const std::filesystem::path& file, std::string_view w
                        !std::filesystem::is_directory(status);
   std::filesystem::path partial = file;
   if (!special) partial += ".partial";
-  const auto fail = [&](const std::string& why) {
+  const auto discard_partial = [&] {
     std::error_code ignored;
     if (!special) std::filesystem::remove(partial, ignored);
+  };
+  const auto fail = [&](const std::string& why) {
+    discard_partial();
     return OutputError::at(file.string(), fmt::format("cannot write {}: {}", what, why));
   };
   {
@@ -48,8 +51,7 @@ void write_file_atomically(const std::filesystem::path& file, std::string_view w
       ok = write(out);
     } catch (...) {
       out.close();
-      std::error_code ignored;
-      if (!special) std::filesystem::remove(partial, ignored);
+      discard_partial();
       throw;
     }
     out.close();  // flushes: a small file's write error shows only here
@@ -59,6 +61,17 @@ void write_file_atomically(const std::filesystem::path& file, std::string_view w
   std::error_code ec;
   std::filesystem::rename(partial, file, ec);
   if (ec) throw fail("cannot rename " + partial.string() + ": " + ec.message());
+}
+
+void write_file_atomically(const std::filesystem::path& file, std::string_view what,
+                           std::string_view contents) {
+  write_file_atomically(
+      file, what,
+      [&](std::ostream& out) {
+        out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+        return true;
+      },
+      true);
 }
 
 }  // namespace ddl

@@ -29,4 +29,8 @@ void create_parent_folder(const std::filesystem::path& file, std::string_view wh
 void write_file_atomically(const std::filesystem::path& file, std::string_view what,
                            const std::function<bool(std::ostream&)>& write, bool binary = false);
 
+/// The same for contents already in memory (text, or an encoded image), written as they are.
+void write_file_atomically(const std::filesystem::path& file, std::string_view what,
+                           std::string_view contents);
+
 }  // namespace ddl

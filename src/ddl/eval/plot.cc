@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -455,18 +454,8 @@ std::vector<std::string> write_figure(const Figure& figure, const std::string& s
   }
   if (!ok) throw OutputError::at(png, "cannot encode the plot");
   write_file_atomically(
-      png, "the plot",
-      [&](std::ostream& out) {
-        out.write(reinterpret_cast<const char*>(bytes.data()),
-                  static_cast<std::streamsize>(bytes.size()));
-        return true;
-      },
-      true);
-  const std::string text = render_svg(figure);
-  write_file_atomically(svg, "the plot", [&](std::ostream& out) {
-    out << text;
-    return true;
-  });
+      png, "the plot", std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  write_file_atomically(svg, "the plot", render_svg(figure));
   return {png, svg};
 }
 

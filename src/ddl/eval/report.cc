@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
@@ -165,11 +164,8 @@ json to_json(const EvalResult& r) {
 }
 
 void write_json_report(const std::string& path, const EvalResult& result) {
-  const std::string text = to_json(result).dump(1, ' ', false, json::error_handler_t::replace);
-  write_file_atomically(path, "the evaluation report", [&](std::ostream& file) {
-    file << text << '\n';
-    return true;
-  });
+  write_file_atomically(path, "the evaluation report",
+                        to_json(result).dump(1, ' ', false, json::error_handler_t::replace) + '\n');
 }
 
 }  // namespace ddl::eval

@@ -146,22 +146,13 @@ void OctreeMap::integrate(const KeyframeScan& scan) {
   last_ms_ = watch.elapsed_ms();
 }
 
-namespace {
-
 // OctoMap's write(filename) reports success whatever the stream did (a full disk included), so
 // the files are written through our own stream, checked after it is closed, and renamed into
 // place (core/filesystem.h): an interrupted write leaves no half-written octree, which OctoMap
 // would read without complaint.
-template <typename WriteFn>
-void write_checked(const std::string& path, const char* what, WriteFn&& write) {
-  write_file_atomically(
-      path, what, [&](std::ostream& out) { return write(out); }, true);
-}
-
-}  // namespace
-
 void OctreeMap::write_ot(const std::string& path) const {
-  write_checked(path, "colour octree", [&](std::ostream& out) { return tree_->write(out); });
+  write_file_atomically(
+      path, "colour octree", [&](std::ostream& out) { return tree_->write(out); }, true);
 }
 
 void OctreeMap::write_bt(const std::string& path) const {
@@ -176,8 +167,9 @@ void OctreeMap::write_bt(const std::string& path) const {
     (void)node;
   }
   occupancy.updateInnerOccupancy();
-  write_checked(path, "occupancy octree",
-                [&](std::ostream& out) { return occupancy.writeBinary(out); });
+  write_file_atomically(
+      path, "occupancy octree", [&](std::ostream& out) { return occupancy.writeBinary(out); },
+      true);
 }
 
 void OctreeMap::write_ply(const std::string& path) const {

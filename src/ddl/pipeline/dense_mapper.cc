@@ -34,13 +34,7 @@ void write_png(const fs::path& path, const cv::Mat& image, std::string_view what
     throw OutputError::at(path.string(), fmt::format("cannot encode {}", what));
   }
   write_file_atomically(
-      path, what,
-      [&](std::ostream& out) {
-        out.write(reinterpret_cast<const char*>(bytes.data()),
-                  static_cast<std::streamsize>(bytes.size()));
-        return true;
-      },
-      true);
+      path, what, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 }  // namespace

@@ -73,11 +73,8 @@ void remove_earlier_outputs(const fs::path& out_dir) {
 /// Whole or not at all (core/filesystem.h); text that is not UTF-8 (a sequence folder's name, a
 /// path in an error message) is written with U+FFFD in place of its bad bytes, not refused.
 void write_json(const fs::path& path, const nlohmann::json& json) {
-  const std::string text = json.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
-  write_file_atomically(path, "the run's summary", [&](std::ostream& file) {
-    file << text << '\n';
-    return true;
-  });
+  write_file_atomically(path, "the run's summary",
+                        json.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + '\n');
 }
 
 nlohmann::json statistics_to_json(const SystemStatistics& s) {
@@ -257,7 +254,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["interrupted"] = outcome.interrupted;
   summary["playback_rate"] = pacer ? nlohmann::json(options.playback_rate) : nlohmann::json();
   summary["frames_dropped"] = dropped;
-  summary["failed"] = error != nullptr || !output_errors.empty();
+  summary["failed"] = error != nullptr;  // output errors: set below, with the evaluation's
   summary["wall_time_s"] = wall_s;
   summary["frames_per_second"] = wall_s > 0 ? static_cast<double>(done) / wall_s : 0.0;
   // The tracking rate: frames over the time until the last frame was tracked, before the
@@ -335,7 +332,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       }
     }
   }
-  if (!output_errors.empty()) {  // the evaluation's files may have added some
+  if (!output_errors.empty()) {
     summary["output_errors"] = output_errors;
     summary["failed"] = true;
   }
