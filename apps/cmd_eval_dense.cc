@@ -6,9 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "cli_support.h"
@@ -17,6 +15,7 @@
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
 #include "ddl/eval/dense_eval.h"
+#include "ddl/io/image_output.h"
 #include "ddl/octomap/octree_map.h"
 
 namespace ddl::app {
@@ -63,11 +62,9 @@ int run_eval_dense(const EvalDenseArgs& args) {
   std::fputs(eval::format_dense_report(result).c_str(), stdout);
   std::fflush(stdout);
   if (!args.json_path.empty()) {
-    create_parent_folder(args.json_path, "the JSON report");
-    std::ofstream file(args.json_path);
-    file << eval::to_json(result).dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
-         << '\n';
-    if (!file) throw InputError::at(args.json_path, "cannot write");
+    write_file_atomically(
+        args.json_path, "the JSON report",
+        eval::to_json(result).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + '\n');
     spdlog::info("wrote {}", args.json_path);
   }
   if (!args.montage_path.empty()) {
@@ -75,9 +72,8 @@ int run_eval_dense(const EvalDenseArgs& args) {
         eval::inpainting_montage(result, args.montage_rows, args.montage_tile_width);
     if (montage.empty()) {
       spdlog::warn("no repaired keyframes: no montage written");
-    } else if (!cv::imwrite(args.montage_path, montage, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
-      throw InputError::at(args.montage_path, "cannot write");
     } else {
+      io::write_png(args.montage_path, montage, "the montage", 9);
       spdlog::info("wrote {}", args.montage_path);
     }
   }

@@ -7,7 +7,6 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
@@ -17,6 +16,7 @@
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
 #include "ddl/core/timing.h"
+#include "ddl/io/image_output.h"
 #include "ddl/synthetic/preview.h"
 #include "ddl/synthetic/sequence.h"
 
@@ -90,10 +90,7 @@ void write_preview(const synthetic::SequenceSource& source, const SynthArgs& arg
   cv::Mat picture = synthetic::make_preview(frame, source.camera().depth_factor);
   // 32 levels per channel: the documentation pictures stay well under 300 KB as PNG.
   picture &= cv::Scalar(0xf8, 0xf8, 0xf8);
-  create_parent_folder(path, "the preview image");
-  if (!cv::imwrite(path, picture, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
-    throw InputError::at(path, "cannot write the preview image");
-  }
+  io::write_png(path, picture, "the preview image", 9);
   spdlog::info("synth: preview of frame {} written to {}", index, path);
 }
 

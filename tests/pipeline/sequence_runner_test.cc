@@ -3,6 +3,7 @@
 
 #include "ddl/pipeline/sequence_runner.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -222,6 +223,46 @@ TEST(SequenceRunner, AnEvaluationReportThatCannotBeWrittenFailsTheRun) {
   EXPECT_NE(summary["output_errors"][0].get<std::string>().find("eval.json"), std::string::npos);
   EXPECT_TRUE(summary.contains("evaluation"));
   EXPECT_EQ(summary.at("outputs").at("evaluation").size(), 6u) << "the six plots";
+}
+
+// The pictures a run writes frame by frame are outputs too: a mask that cannot be written (here a
+// folder stands in its place) lets the run go on and write the other masks, then fails it with an
+// error that counts the failures and names the first, listed in summary.json.
+TEST(SequenceRunner, ASavedMaskThatCannotBeWrittenFailsTheRunAfterTheOthers) {
+  const auto vocabulary = testing::default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const auto source = synthetic::make_sequence_source(testing::preset_config("syn_walking_xyz", 4));
+  const MemoryDataset dataset(*source);
+  const fs::path out = fs::path(::testing::TempDir()) / "sequence_runner_mask_error";
+  const RunOptions options = fresh_run_options(out);
+  SystemConfig config = testing::core_config();
+  config.dynamic.enabled = true;
+  config.dynamic.segmentation.backend = segmentation::Backend::kNone;
+  config.save_masks = true;
+  config.output_dir = out.string();
+  const std::string blocked = fmt::format("{:.6f}.png", dataset.timestamp(2));
+  fs::create_directories(out / "masks" / blocked);
+  System system(config, dataset.camera(), vocabulary);
+  try {
+    run_sequence(dataset, system, options);
+    ADD_FAILURE() << "the run did not fail";
+  } catch (const OutputError& e) {
+    // The combined mask and its parts count alike; only frame 2's combined mask failed.
+    EXPECT_EQ(std::string(e.what()).rfind("1 of ", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("files of the saved masks"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(blocked), std::string::npos) << e.what();
+  }
+  for (std::size_t i : {0, 1, 3}) {
+    EXPECT_TRUE(
+        fs::is_regular_file(out / "masks" / fmt::format("{:.6f}.png", dataset.timestamp(i))))
+        << "frame " << i;
+  }
+  std::ifstream file(out / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(file);
+  EXPECT_TRUE(summary.at("failed").get<bool>());
+  ASSERT_EQ(summary.at("output_errors").size(), 1u);
+  EXPECT_EQ(pose_lines(out / "CameraTrajectory.txt"), 4u);
 }
 
 // Tracking lost while the map is young resets it, which drops the poses before the reset: the

@@ -7,12 +7,14 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <iterator>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/eval/ate.h"
 #include "ddl/io/trajectory_io.h"
 #include "ddl/io/tum_dataset.h"
@@ -508,29 +510,22 @@ cv::Mat inpainting_montage(const DenseEvalResult& result, int rows, int tile_wid
   return montage;
 }
 
-}  // namespace ddl::eval
-
-namespace ddl::eval {
-
 void write_classified_voxels_ply(const MapEvaluation& map, const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (file == nullptr) throw InputError::at(path, "cannot open for writing");
-  fmt::print(file,
-             "ply\nformat ascii 1.0\ncomment DDL-SLAM eval-dense: near static green, ghost red, "
-             "other blue; ground-truth frame\nelement vertex {}\nproperty float x\nproperty "
-             "float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty "
-             "uchar blue\nend_header\n",
-             map.centres_gt.size());
+  std::string text = fmt::format(
+      "ply\nformat ascii 1.0\ncomment DDL-SLAM eval-dense: near static green, ghost red, "
+      "other blue; ground-truth frame\nelement vertex {}\nproperty float x\nproperty "
+      "float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty "
+      "uchar blue\nend_header\n",
+      map.centres_gt.size());
   for (std::size_t i = 0; i < map.centres_gt.size(); ++i) {
     const Vec3d& p = map.centres_gt[i];
     const VoxelClass c = i < map.labels.size() ? map.labels[i] : VoxelClass::kOther;
     const char* rgb = c == VoxelClass::kStatic  ? "0 200 0"
                       : c == VoxelClass::kGhost ? "220 0 0"
                                                 : "0 0 220";
-    fmt::print(file, "{:.4f} {:.4f} {:.4f} {}\n", p.x(), p.y(), p.z(), rgb);
+    fmt::format_to(std::back_inserter(text), "{:.4f} {:.4f} {:.4f} {}\n", p.x(), p.y(), p.z(), rgb);
   }
-  const bool ok = std::fclose(file) == 0;
-  if (!ok) throw InputError::at(path, "write failed");
+  write_file_atomically(path, "the classified voxels", text);
 }
 
 }  // namespace ddl::eval

@@ -69,7 +69,8 @@ struct MapEvaluation {
 };
 
 /// Writes the classified voxel centres as an ASCII PLY point cloud in the ground-truth frame:
-/// near static green, ghost red, other blue. Throws ddl::IoError naming the file.
+/// near static green, ghost red, other blue, whole or not at all. Throws OutputError naming the
+/// file.
 void write_classified_voxels_ply(const MapEvaluation& map, const std::string& path);
 
 struct DenseEvalResult {

@@ -6,12 +6,12 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
 #include "ddl/eval/stats.h"
+#include "ddl/io/image_output.h"
 
 namespace ddl::eval {
 namespace {
@@ -445,16 +445,7 @@ std::vector<std::string> write_figure(const Figure& figure, const std::string& s
   create_parent_folder(stem, "the plots");
   const std::string png = stem + ".png";
   const std::string svg = stem + ".svg";
-  std::vector<unsigned char> bytes;
-  bool ok = false;
-  try {
-    ok = cv::imencode(".png", render_png_image(figure), bytes);
-  } catch (const cv::Exception& e) {
-    throw OutputError::at(png, fmt::format("cannot encode the plot: {}", e.what()));
-  }
-  if (!ok) throw OutputError::at(png, "cannot encode the plot");
-  write_file_atomically(
-      png, "the plot", std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  io::write_png(png, render_png_image(figure), "the plot");
   write_file_atomically(svg, "the plot", render_svg(figure));
   return {png, svg};
 }

@@ -9,7 +9,6 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -24,20 +23,6 @@
 
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
-
-namespace {
-
-/// A PNG written whole or not at all (core/filesystem.h); OutputError naming it otherwise.
-void write_png(const fs::path& path, const cv::Mat& image, std::string_view what) {
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", image, bytes)) {
-    throw OutputError::at(path.string(), fmt::format("cannot encode {}", what));
-  }
-  write_file_atomically(
-      path, what, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-}
-
-}  // namespace
 
 void DenseMapperConfig::validate() const {
   if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
@@ -249,13 +234,13 @@ void DenseMapper::process(DenseKeyframe item) {
   if (!config_.save_inpainted_dir.empty()) {
     const fs::path dir(config_.save_inpainted_dir);
     const std::string stem = fmt::format("{:.6f}", item.keyframe->timestamp_s());
-    cv::imwrite((dir / (stem + "_rgb.png")).string(), stored.bgr);
+    saved_images_.write_png(dir / (stem + "_rgb.png"), stored.bgr);
     cv::Mat depth16;
     stored.depth_m.convertTo(depth16, CV_16UC1, camera_.depth_factor);
-    cv::imwrite((dir / (stem + "_depth.png")).string(), depth16);
-    cv::imwrite((dir / (stem + "_unfilled.png")).string(), stored.unfilled);
+    saved_images_.write_png(dir / (stem + "_depth.png"), depth16);
+    saved_images_.write_png(dir / (stem + "_unfilled.png"), stored.unfilled);
     // The mask the repair worked on: filled pixels = mask and not unfilled (eval-dense).
-    cv::imwrite((dir / (stem + "_mask.png")).string(), mask);
+    saved_images_.write_png(dir / (stem + "_mask.png"), mask);
   }
 
   if (octree_) {
@@ -350,10 +335,10 @@ std::vector<std::string> DenseMapper::write_outputs(const std::string& dir,
   // The map lives in the SLAM world frame, the first camera's (y points down, roughly
   // "up" reversed), so the top view looks along y.
   write("map_top.png", [&](const std::string& p) {
-    write_png(p, octree_->render(false, 1), "the map's top view");
+    io::write_png(p, octree_->render(false, 1), "the map's top view");
   });
   write("map_oblique.png", [&](const std::string& p) {
-    write_png(p, octree_->render(true, 1), "the map's oblique view");
+    io::write_png(p, octree_->render(true, 1), "the map's oblique view");
   });
   return written;
 }

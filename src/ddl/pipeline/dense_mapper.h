@@ -13,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 #include <variant>
@@ -22,6 +23,7 @@
 #include "ddl/core/bounded_queue.h"
 #include "ddl/core/timing.h"
 #include "ddl/inpainting/background_inpainter.h"
+#include "ddl/io/image_output.h"
 #include "ddl/map/keyframe.h"
 #include "ddl/map/map.h"
 #include "ddl/octomap/octree_map.h"
@@ -94,6 +96,8 @@ class DenseMapper {
                                          std::vector<std::string>& errors) const;
 
   DenseStats stats() const;
+  /// The repaired keyframes of save_inpainted_dir that could not be written (io/image_output.h).
+  std::optional<std::string> saved_images_error() const { return saved_images_.error(); }
   const TimingStats& timings() const { return timings_; }
   const octomap::OctreeMap* octree() const { return octree_.get(); }
 
@@ -140,6 +144,7 @@ class DenseMapper {
   TimingStats timings_;
   mutable std::mutex stats_mutex_;
   DenseStats stats_;
+  io::ImageOutputLog saved_images_{"the repaired keyframes (--save-inpainted)"};
   std::unique_ptr<BoundedQueue<Item>> queue_;
   std::thread thread_;
   std::exception_ptr error_;

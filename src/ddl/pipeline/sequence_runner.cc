@@ -239,6 +239,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
                              "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
   });
 
+  for (const std::string& e : system.frame_output_errors()) {
+    spdlog::error("{}", e);
+    output_errors.push_back(e);
+  }
   outcome.statistics = system.statistics();
   std::vector<std::string> map_files;
   write_output([&] {

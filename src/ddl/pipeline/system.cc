@@ -5,7 +5,6 @@
 
 #include <filesystem>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
@@ -256,14 +255,14 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (config_.save_masks && !config_.output_dir.empty() && !outcome.masks.combined.empty()) {
     const auto dir = std::filesystem::path(config_.output_dir) / "masks";
     const std::string name = fmt::format("{:.6f}.png", frame.timestamp_s);
-    cv::imwrite((dir / name).string(), outcome.masks.combined);
+    saved_masks_.write_png(dir / name, outcome.masks.combined);
     // The parts, where they marked anything (an empty part is written as no file).
     const std::pair<const char*, const cv::Mat*> parts[] = {{"cnn", &outcome.masks.cnn},
                                                             {"geometry", &outcome.masks.geometry},
                                                             {"memory", &outcome.masks.memory}};
     for (const auto& [part, mask] : parts) {
       if (!mask->empty() && cv::countNonZero(*mask) > 0) {
-        cv::imwrite((dir / part / name).string(), *mask);
+        saved_masks_.write_png(dir / part / name, *mask);
       }
     }
   }
@@ -401,6 +400,14 @@ io::Trajectory System::keyframe_trajectory() const {
     out.emplace_back(kf->timestamp_s(), kf->T_w_c());
   }
   return out;
+}
+
+std::vector<std::string> System::frame_output_errors() const {
+  std::vector<std::string> errors;
+  for (const auto& error : {saved_masks_.error(), dense_->saved_images_error()}) {
+    if (error) errors.push_back(*error);
+  }
+  return errors;
 }
 
 SystemStatistics System::statistics() const {

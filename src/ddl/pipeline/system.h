@@ -31,11 +31,14 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/bounded_queue.h"
 #include "ddl/core/timing.h"
+#include "ddl/io/image_output.h"
 #include "ddl/io/rgbd_frame.h"
 #include "ddl/io/trajectory_io.h"
 #include "ddl/loop/loop_closer.h"
@@ -109,6 +112,9 @@ class System {
   const TimingStats& timings() const { return timings_; }
   std::shared_ptr<const map::Map> map() const { return map_; }
   const DenseMapper& dense_mapper() const { return *dense_; }
+  /// The per-frame pictures (save_masks; the dense stage's save_inpainted_dir) that could not be
+  /// written, one message per kind (io/image_output.h); empty when all were written.
+  std::vector<std::string> frame_output_errors() const;
   const DynamicFrontEnd& dynamic_front_end() const { return *dynamic_; }
   /// See DynamicFrontEnd::set_stored_mask_mapping; before the first process() or segment().
   void set_stored_mask_mapping(std::function<cv::Mat(const cv::Mat&)> mapping) {
@@ -143,6 +149,7 @@ class System {
   std::unique_ptr<mapping::LocalMapper> mapper_;
   std::unique_ptr<loop::LoopCloser> loop_closer_;
   std::unique_ptr<DynamicFrontEnd> dynamic_;
+  io::ImageOutputLog saved_masks_{"the saved masks (--save-masks)"};
   std::unique_ptr<DenseMapper> dense_;
   // Fallback pose of the geometry check: constant-velocity prediction from the last two tracked
   // frames.

@@ -9,11 +9,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/highgui.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
+#include "ddl/io/image_output.h"
 #include "ddl/viewer/frame_drawer.h"
 
 namespace fs = std::filesystem;
@@ -197,9 +197,7 @@ void Viewer::run() {
       if (!config_.output_dir.empty()) {
         const fs::path path =
             fs::path(config_.output_dir) / fmt::format("frame_{:06d}.png", item->frame.index);
-        if (!cv::imwrite(path.string(), view)) {
-          throw InputError::at(path.string(), "cannot write the viewer image");
-        }
+        io::write_png(path, view, "the viewer image");
       }
       if (config_.window) {
         if (!window_open) {
