@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -134,11 +135,6 @@ RunResult run_sequence_command(const RunArgs& args,
   if (!vocabulary) vocabulary = load_vocabulary(resolve_vocabulary(args.vocabulary_path));
 
   create_folder(args.output_dir, "the run's outputs");
-  write_file_atomically(fs::path(args.output_dir) / "config.yaml", "the effective configuration",
-                        config::system_config_to_yaml(config));
-  write_file_atomically(fs::path(args.output_dir) / "camera.yaml", "the camera of the frames",
-                        config::camera_to_yaml(dataset->camera()));
-
   pipeline::System system(config, dataset->camera(), vocabulary);
 
   pipeline::RunOptions run_options;
@@ -148,6 +144,14 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.playback_rate = args.playback_rate;
   run_options.drop_late_frames = args.drop_late_frames;
   run_options.evaluate = !args.no_eval;
+  // Written once the run has found its options valid: a run refused at its start (a bad
+  // --first-frame, a missing model) leaves an earlier run's folder consistent.
+  run_options.on_start = [&] {
+    write_file_atomically(fs::path(args.output_dir) / "config.yaml", "the effective configuration",
+                          config::system_config_to_yaml(config));
+    write_file_atomically(fs::path(args.output_dir) / "camera.yaml", "the camera of the frames",
+                          config::camera_to_yaml(dataset->camera()));
+  };
   // Ground-truth dynamic masks (sequences written by `ddl_slam synth`): mask quality metrics.
   std::unique_ptr<pipeline::MaskEvaluator> mask_evaluator;
   if (config.dynamic.enabled && !args.no_eval) {
@@ -157,7 +161,13 @@ RunResult run_sequence_command(const RunArgs& args,
   std::unique_ptr<viewer::Viewer> view;
   if (view_config) {
     // The video plays at the sequence's rate, whichever frames are drawn.
-    view_config->video_fps = dataset->camera().fps / view_config->every_n_frames;
+    // OpenCV's Motion-JPEG writer takes 1 to 1000 frames per second: a sparser stride plays faster.
+    const double fps = dataset->camera().fps / view_config->every_n_frames;
+    view_config->video_fps = std::clamp(fps, 1.0, 1000.0);
+    if (!view_config->video_path.empty() && view_config->video_fps != fps) {
+      spdlog::warn("viewer video: {:.3g} views per second of the sequence, written at {:g} fps",
+                   fps, view_config->video_fps);
+    }
     view = std::make_unique<viewer::Viewer>(*view_config, system.map());
     run_options.on_frame = [&](const io::RgbdFrame& frame, const pipeline::FrameOutcome& result) {
       view->show(to_view_frame(frame, result, system.statistics().keyframes_created));

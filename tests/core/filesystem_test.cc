@@ -37,23 +37,23 @@ TEST_F(CreateFolderTest, CreatesMissingParentsAndAcceptsAnExistingFolder) {
   EXPECT_NO_THROW(create_parent_folder("file_in_the_working_folder.txt", "nothing"));
 }
 
-// A file in the way (as the folder itself or as one of its parents) is an InputError that names
-// the folder and what it was for.
-TEST_F(CreateFolderTest, AFileInTheWayIsAnInputErrorNamingTheFolderAndItsUse) {
+// A file in the way (as the folder itself or as one of its parents) is an OutputError (exit code
+// 1, as every output that cannot be written) that names the folder and what it was for.
+TEST_F(CreateFolderTest, AFileInTheWayIsAnOutputErrorNamingTheFolderAndItsUse) {
   const fs::path file = root_ / "taken";
   std::ofstream(file) << "x";
   for (const fs::path& folder : {file, file / "below"}) {
     try {
       create_folder(folder, "the masks");
       ADD_FAILURE() << "no error for " << folder;
-    } catch (const InputError& e) {
+    } catch (const OutputError& e) {
       const std::string message = e.what();
       EXPECT_NE(message.find(folder.string()), std::string::npos) << message;
       EXPECT_NE(message.find("cannot create the folder for the masks"), std::string::npos)
           << message;
     }
   }
-  EXPECT_THROW(create_parent_folder(file / "out.txt", "the trajectory"), InputError);
+  EXPECT_THROW(create_parent_folder(file / "out.txt", "the trajectory"), OutputError);
   EXPECT_TRUE(fs::is_regular_file(file));
 }
 

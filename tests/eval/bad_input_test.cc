@@ -112,6 +112,19 @@ TEST_F(BadInputTest, SingleOverlappingPoseIsNotEnough) {
   expect_contains(msg, "only 1 ground-truth/estimate pose(s) associate");
 }
 
+// Coordinates so large that the squared errors overflow give no table: an error naming the files
+// instead of an ATE of inf or nan.
+TEST_F(BadInputTest, CoordinatesTooLargeToEvaluateAreAnError) {
+  std::string s;
+  for (int k = 0; k < 80; ++k) {
+    s += fmt::format("{} {} 0 0 0 0 0 1\n", 100.0 + k * 0.03125, 1e300 * (k % 3));
+  }
+  test::write_text(inputs_.estimate_path, s);
+  const std::string msg = input_error_of(inputs_);
+  expect_contains(msg, inputs_.estimate_path);
+  expect_contains(msg, "not finite");
+}
+
 TEST_F(BadInputTest, EstimateShorterThanDeltaFailsRpeClearly) {
   test::write_text(inputs_.estimate_path, good_trajectory(100.0, 20));  // 0.6 s < 1 s
   const std::string msg = input_error_of(inputs_);

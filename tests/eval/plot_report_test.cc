@@ -77,6 +77,26 @@ TEST(PlotTest, PngShowsEachSeriesColourAndSvgHasEveryLine) {
   EXPECT_NE(svg.find(">y [m]</text>"), std::string::npos);
 }
 
+// A diverged estimate far out (1e100 m) or a range a double cannot hold still gives a picture:
+// few ticks, labels in exponent notation, no endless tick loop.
+TEST(PlotTest, HugeAndInfiniteRangesStillRender) {
+  for (const double far : {1e100, 1e308}) {
+    Figure f;
+    f.title = "far";
+    f.equal_aspect = true;
+    PlotSeries a;
+    a.label = "est";
+    a.color = {0, 0, 255};
+    a.polylines = {{{-far, 0}, {far, 1}}};
+    f.series = {a};
+    const cv::Mat img = render_png_image(f);
+    EXPECT_EQ(img.cols, f.width_px) << far;
+    const std::string svg = render_svg(f);
+    EXPECT_LT(svg.size(), 100000u) << far;
+    EXPECT_EQ(svg.find("0000000000000000"), std::string::npos) << "fixed-point labels of " << far;
+  }
+}
+
 TEST(PlotTest, EvalPlotsAreWrittenAsPngAndSvg) {
   const EvalResult r = small_result();
   const Figure top = trajectory_top_view(r, Plane::kXZ);

@@ -2,14 +2,18 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "config_error_check.h"
 #include "ddl/core/error.h"
@@ -176,6 +180,31 @@ TEST(TumDataset, MalformedAssociationsLine) {
   EXPECT_THAT(msg, HasSubstr("expected 4 fields"));
 }
 
+// associate.py pairs each depth image once: an associations.txt that pairs one twice is an error
+// naming both lines.
+TEST(TumDataset, ADepthImagePairedTwiceIsAnError) {
+  TempDir dir("seq");
+  write_sequence(dir, 3);
+  dir.write("associations.txt",
+            "1000.0 rgb/a.png 1000.003 depth/a.png\n1000.1 rgb/b.png 1000.103 depth/b.png\n"
+            "1000.2 rgb/c.png 1000.003 depth/a.png\n");
+  SequenceOptions lazy;
+  lazy.check_files_on_open = false;
+  const std::string msg = input_error_of([&] { TumDataset(dir.path(), tiny_camera(), lazy); });
+  EXPECT_THAT(msg, HasSubstr(dir.file("associations.txt") + ":3:"));
+  EXPECT_THAT(msg, HasSubstr("paired already on line 1"));
+}
+
+// A list saved as "UTF-8 with BOM" keeps its first comment a comment.
+TEST(TumDataset, AByteOrderMarkBeforeTheFirstCommentIsSkipped) {
+  TempDir dir("seq");
+  write_sequence(dir, 3);
+  std::ifstream in(dir.file("rgb.txt"));
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  dir.write("rgb.txt", "\xEF\xBB\xBF" + text);
+  EXPECT_EQ(TumDataset(dir.path(), tiny_camera()).size(), 3u);
+}
+
 TEST(TumDataset, EmptyList) {
   TempDir dir("seq");
   write_sequence(dir, 3);
@@ -247,6 +276,44 @@ TEST(TumDataset, CorruptImage) {
   EXPECT_THAT(msg, HasSubstr("cannot decode RGB image"));
 }
 
+// libjpeg decodes a cut-off JPEG without an error (grey rest, a warning without the file's name):
+// the reader refuses it by its missing end-of-image marker. The whole file still reads.
+TEST(TumDataset, TruncatedJpegIsAnError) {
+  TempDir dir("seq");
+  write_sequence(dir, 2);
+  const TumDataset dataset(dir.path(), tiny_camera());
+  const std::string rgb_path = dataset.pairs()[1].rgb_path;
+  std::vector<unsigned char> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::imread(rgb_path), jpeg));
+  const auto write = [&](std::size_t bytes) {
+    std::ofstream(rgb_path, std::ios::binary | std::ios::trunc)
+        .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(bytes));
+  };
+  write(jpeg.size());
+  EXPECT_EQ(dataset.frame(1).rgb.size(), cv::Size(32, 24));
+  write(jpeg.size() * 2 / 3);
+  const std::string msg = input_error_of([&] { dataset.frame(1); });
+  EXPECT_THAT(msg, HasSubstr(rgb_path));
+  EXPECT_THAT(msg, HasSubstr("truncated JPEG"));
+}
+
+// A FIFO in an image's place would block the reading thread where Ctrl-C cannot reach it.
+TEST(TumDataset, AnImageThatIsNoRegularFileIsAnError) {
+  TempDir dir("seq");
+  write_sequence(dir, 2);
+  const std::string depth_path = TumDataset(dir.path(), tiny_camera()).pairs()[1].depth_path;
+  std::filesystem::remove(depth_path);
+  ASSERT_EQ(mkfifo(depth_path.c_str(), 0600), 0);
+  std::string msg = input_error_of([&] { TumDataset(dir.path(), tiny_camera()); });
+  EXPECT_THAT(msg, HasSubstr(depth_path));
+  EXPECT_THAT(msg, HasSubstr("not a regular file"));
+  SequenceOptions lazy;
+  lazy.check_files_on_open = false;
+  const TumDataset dataset(dir.path(), tiny_camera(), lazy);
+  msg = input_error_of([&] { dataset.frame(1); });
+  EXPECT_THAT(msg, HasSubstr("not a regular file"));
+}
+
 TEST(TumDataset, EightBitDepthIsAnError) {
   TempDir dir("seq");
   write_sequence(dir, 2);
@@ -294,6 +361,16 @@ TEST(TumDataset, MissingGroundTruth) {
   const TumDataset with_gt(dir.path(), tiny_camera());
   ASSERT_TRUE(with_gt.groundtruth_path().has_value());
   EXPECT_EQ(read_tum_trajectory(*with_gt.groundtruth_path()).size(), 2u);
+}
+
+// groundtruth.txt is validated with the frame lists: a malformed line stops the run before it
+// starts, not after its last frame.
+TEST(TumDataset, AMalformedGroundTruthIsFoundWhenOpened) {
+  TempDir dir("seq");
+  write_sequence(dir, 2);
+  dir.write("groundtruth.txt", "# gt\n1000.0 0 0 0 0 0 0 1\n1000.01 0.1 0 0 0 0 0\n");
+  const std::string msg = input_error_of([&] { TumDataset(dir.path(), tiny_camera()); });
+  EXPECT_THAT(msg, HasSubstr(dir.file("groundtruth.txt") + ":3"));
 }
 
 TEST(TumDataset, IndexOutOfRangeAndBadOptions) {

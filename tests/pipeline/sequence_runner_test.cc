@@ -182,13 +182,21 @@ TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
   options.output_dir = out.string();
   options.evaluate = false;
   System system(testing::core_config(), dataset.camera(), vocabulary);
-  // A bad option ends the run before it starts: the earlier outputs stay.
+  // A bad option ends the run before it starts: the earlier outputs stay, and the caller's own
+  // outputs (on_start: cmd_run's config.yaml) are not written.
+  int starts = 0;
+  options.on_start = [&] {
+    ++starts;
+    EXPECT_FALSE(fs::exists(out / "map.ot")) << "called before the earlier outputs went";
+  };
   options.first_frame = 100;
   EXPECT_THROW(run_sequence(dataset, system, options), ConfigError);
   EXPECT_TRUE(fs::exists(out / "map.ot"));
   EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_EQ(starts, 0);
   options.first_frame = 0;
   run_sequence(dataset, system, options);
+  EXPECT_EQ(starts, 1);
   EXPECT_FALSE(fs::exists(out / "eval" / "eval.json"));
   EXPECT_FALSE(fs::exists(out / "map.ot"));
   EXPECT_TRUE(fs::exists(out / "notes.txt")) << "not listed, not ours";

@@ -43,6 +43,21 @@ TEST(Segmenter, OnnxFindsThePeopleInBasketballPhoto) {
   EXPECT_LT(cv::countNonZero(top), 0.2 * static_cast<double>(top.total()));
 }
 
+// The ONNX export fixes its input size: another size is a configuration error naming the keys
+// when the segmenter is made, not an inference error at the first frame.
+TEST(Segmenter, AnInputSizeTheModelDoesNotTakeNamesTheKeys) {
+  SegmenterConfig config;
+  const fs::path model = fs::path(shared_dir()) / config.model_path;
+  if (!fs::exists(model)) GTEST_SKIP() << "model not found: " << model;
+  config.input_width = 640;
+  config.input_height = 480;
+  EXPECT_TRUE(
+      test_support::throws_config_error_for_key([&] { make_segmenter(config, shared_dir()); },
+                                                "dynamic.segmentation.input_width/input_height"));
+  EXPECT_TRUE(test_support::throws_config_error_naming(
+      [&] { make_segmenter(config, shared_dir()); }, "640x480"));
+}
+
 TEST(Segmenter, MissingModelIsAClearError) {
   SegmenterConfig config;
   config.model_path = "/nonexistent/model.onnx";

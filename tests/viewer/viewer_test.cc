@@ -326,14 +326,14 @@ TEST_F(ViewerImages, AnImageThatCannotBeWrittenIsAnErrorOfShowOrFinish) {
   try {
     for (std::size_t i = 0; i < 5; ++i) viewer.show(grey_frame(i));
     viewer.finish();
-  } catch (const InputError& e) {
+  } catch (const OutputError& e) {
     thrown = true;
     // The folder the image goes into is named (core/filesystem.h).
     EXPECT_NE(std::string(e.what()).find(dir_.string()), std::string::npos) << e.what();
   }
   EXPECT_TRUE(thrown);
   // The error stays: a caller that goes on is told again instead of losing frames silently.
-  EXPECT_THROW(viewer.show(grey_frame(9)), InputError);
+  EXPECT_THROW(viewer.show(grey_frame(9)), OutputError);
   fs::remove(dir_);
 }
 
@@ -368,7 +368,7 @@ TEST_F(ViewerImages, AVideoThatCannotBeWrittenNamesTheFile) {
   try {
     viewer.finish();
     ADD_FAILURE() << "an unwritable video was accepted";
-  } catch (const InputError& e) {
+  } catch (const OutputError& e) {
     EXPECT_NE(std::string(e.what()).find("view.avi"), std::string::npos) << e.what();
   }
 }
@@ -386,6 +386,8 @@ TEST(ViewerConfig, InvalidSettingsNameTheirKey) {
   }
   config.every_n_frames = 1;
   config.video_fps = 0.0;
+  EXPECT_THROW(config.validate(), ConfigError);
+  config.video_fps = 0.5;  // below OpenCV's Motion-JPEG writer's range (cmd_run clamps to 1)
   EXPECT_THROW(config.validate(), ConfigError);
   config.video_fps = 30.0;
   config.viewpoint_back_m = 0.0;  // straight down the camera's down axis: no image "up"

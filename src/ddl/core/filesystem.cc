@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <system_error>
 
@@ -15,8 +17,8 @@ void create_folder(const std::filesystem::path& folder, std::string_view what) {
   // create_directories reports no error for an existing path that is a file.
   if (!ec && std::filesystem::is_directory(folder, ec)) return;
   const std::string reason = ec ? ec.message() : "it exists and is not a folder";
-  throw InputError::at(folder.string(),
-                       fmt::format("cannot create the folder for {}: {}", what, reason));
+  throw OutputError::at(folder.string(),
+                        fmt::format("cannot create the folder for {}: {}", what, reason));
 }
 
 void create_parent_folder(const std::filesystem::path& file, std::string_view what) {
@@ -44,8 +46,13 @@ void write_file_atomically(const std::filesystem::path& file, std::string_view w
     return OutputError::at(file.string(), fmt::format("cannot write {}: {}", what, why));
   };
   {
+    errno = 0;
     std::ofstream out(partial, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
-    if (!out) throw fail("cannot open " + partial.string());
+    if (!out) {
+      // libstdc++ leaves open(2)'s errno: the reason (no permission, no space, read-only).
+      throw fail("cannot open " + partial.string() +
+                 (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
+    }
     bool ok = false;
     try {
       ok = write(out);

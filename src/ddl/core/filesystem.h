@@ -1,5 +1,5 @@
 #pragma once
-// Output folders: created with their parents, or an InputError that names the folder, what it
+// Output folders: created with their parents, or an OutputError that names the folder, what it
 // was for and why it could not be created (a file in the way, no permission), so that every
 // writer reports the same failure the same way.
 
@@ -11,7 +11,7 @@
 namespace ddl {
 
 /// Creates `folder` and its missing parents; nothing when it is already a folder. Throws
-/// InputError naming `folder` and `what` it is for when it cannot be created or exists as
+/// OutputError naming `folder` and `what` it is for when it cannot be created or exists as
 /// something other than a folder.
 void create_folder(const std::filesystem::path& folder, std::string_view what);
 
@@ -23,7 +23,7 @@ void create_parent_folder(const std::filesystem::path& file, std::string_view wh
 /// mid-write) never sees a half-written file: a failed write leaves the previous `file`, if any,
 /// and removes the temporary one. An existing file that is neither a regular file nor a folder (a
 /// device such as /dev/full, a FIFO, a symbolic link) is written into directly, never replaced.
-/// `write` returning false counts as a failed write. Creates the parent folder (InputError as
+/// `write` returning false counts as a failed write. Creates the parent folder (OutputError as
 /// create_parent_folder); throws OutputError naming `file` and `what` it is when it cannot be
 /// opened, written or renamed.
 void write_file_atomically(const std::filesystem::path& file, std::string_view what,

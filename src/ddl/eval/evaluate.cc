@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "ddl/core/error.h"
 
 namespace ddl::eval {
@@ -47,6 +49,14 @@ EvalResult evaluate(const io::Trajectory& groundtruth, const io::Trajectory& est
   try {
     r.ate = compute_ate(groundtruth, estimate, options.ate());
     r.rpe = compute_rpe(groundtruth, estimate, options.rpe());
+    // Coordinates so large that the squared errors overflow (a diverged estimate written out,
+    // or a file in other units) give no number a table could show.
+    for (const double v : {r.ate.stats_m.rmse, r.rpe.trans_m.rmse, r.rpe.rot_deg.rmse}) {
+      if (!std::isfinite(v)) {
+        throw InputError(
+            "the errors are not finite: coordinates too large to evaluate (in metres?)");
+      }
+    }
   } catch (const InputError& e) {
     throw both(e);
   }

@@ -51,20 +51,36 @@ double nice_step(double range, double target) {
   return f * mag;
 }
 
+// Ticks at multiples of a nice step. Values beyond what fixed-point labels and a double's integer
+// steps can show (a diverged estimate far out) get labels in exponent notation (decimals -1), or
+// only the two ends of the axis; the count stays bounded whatever the range.
 void make_ticks(Axis& axis, double target) {
-  const double step = nice_step(axis.hi - axis.lo, target);
-  axis.decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+  constexpr int kMaxTicks = 100;
   axis.ticks.clear();
-  const auto first = static_cast<long long>(std::ceil(axis.lo / step - 1e-9));
-  for (long long k = first;; ++k) {
-    double v = static_cast<double>(k) * step;
+  const double range = axis.hi - axis.lo;
+  const double magnitude = std::max(std::abs(axis.lo), std::abs(axis.hi));
+  const double step = nice_step(range, target);
+  const bool drawable = std::isfinite(range) && range > 0.0 && std::isfinite(step) && step > 0.0;
+  if (!drawable || magnitude / step > 1e12) {
+    axis.decimals = -1;
+    if (std::isfinite(axis.lo)) axis.ticks.push_back(axis.lo);
+    if (std::isfinite(axis.hi) && axis.hi != axis.lo) axis.ticks.push_back(axis.hi);
+    return;
+  }
+  axis.decimals =
+      magnitude >= 1e7 ? -1 : std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+  const double first = std::ceil(axis.lo / step - 1e-9);
+  for (int k = 0; k < kMaxTicks; ++k) {
+    double v = (first + k) * step;
     if (v > axis.hi + 1e-9 * step) break;
     if (std::abs(v) < 1e-9 * step) v = 0.0;  // no "-0.00"
     axis.ticks.push_back(v);
   }
 }
 
-std::string tick_label(double v, int decimals) { return fmt::format("{:.{}f}", v, decimals); }
+std::string tick_label(double v, int decimals) {
+  return decimals < 0 ? fmt::format("{:.3g}", v) : fmt::format("{:.{}f}", v, decimals);
+}
 
 struct Layout {
   int width = 0;

@@ -21,6 +21,8 @@ std::vector<TextRow> read_text_table(const std::string& path) {
   std::size_t line_no = 0;
   while (std::getline(file, text)) {
     ++line_no;
+    // A byte-order mark (an editor's UTF-8 with BOM) would make a first "#" comment a data line.
+    if (line_no == 1 && text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
     if (!text.empty() && text.back() == '\r') text.pop_back();
     if (text.empty() || text[0] == '#') continue;
     TextRow row;

@@ -3,15 +3,22 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <unordered_map>
+#include <vector>
 
 #include "ddl/core/error.h"
 #include "ddl/io/associate.h"
 #include "ddl/io/text_table.h"
+#include "ddl/io/trajectory_io.h"
 
 namespace ddl::io {
 namespace fs = std::filesystem;
@@ -79,19 +86,63 @@ std::string describe_size(const cv::Mat& image) {
   return fmt::format("{}x{}", image.cols, image.rows);
 }
 
+/// Whether a JPEG file's bytes end with its end-of-image marker (FF D9), allowing for the padding
+/// some writers put after it. libjpeg decodes a cut-off file without an error (it only prints
+/// "Premature end of JPEG file" and fills the rest grey), so OpenCV would hand back a picture.
+bool jpeg_has_end_marker(const std::vector<unsigned char>& bytes) {
+  const std::size_t tail = std::min<std::size_t>(bytes.size(), 64);
+  for (std::size_t i = bytes.size() - tail; i + 1 < bytes.size(); ++i) {
+    if (bytes[i] == 0xFF && bytes[i + 1] == 0xD9) return true;
+  }
+  return false;
+}
+
 cv::Mat read_image(const std::string& path, const char* what) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError::at(path, fmt::format("{} image not found", what));
-  if (fs::is_directory(path, ec)) {
-    throw InputError::at(path, fmt::format("{} image path is a directory", what));
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) throw InputError::at(path, fmt::format("{} image not found", what));
+  if (!fs::is_regular_file(status)) {
+    // A folder, or a FIFO or device, whose read could block the run where Ctrl-C cannot stop it.
+    throw InputError::at(path,
+                         fmt::format("{} image is not a regular file ({})", what,
+                                     fs::is_directory(status) ? "a folder" : "a special file"));
   }
-  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  std::ifstream file(path, std::ios::binary | std::ios::ate);
+  if (!file) {
+    throw InputError::at(path, fmt::format("cannot open {} image: {}", what, std::strerror(errno)));
+  }
+  const std::streamoff size = file.tellg();
+  if (size <= 0) throw InputError::at(path, fmt::format("{} image file is empty", what));
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
+  file.seekg(0);
+  if (!file.read(reinterpret_cast<char*>(bytes.data()), size)) {
+    throw InputError::at(path, fmt::format("cannot read {} image: {}", what, std::strerror(errno)));
+  }
+  const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF;
+  if (jpeg && !jpeg_has_end_marker(bytes)) {
+    throw InputError::at(
+        path, fmt::format("{} image is a truncated JPEG (no end-of-image marker)", what));
+  }
+  cv::Mat image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
   if (image.empty()) {
     throw InputError::at(
         path,
         fmt::format("cannot decode {} image (corrupt, truncated or unsupported format)", what));
   }
   return image;
+}
+
+/// A listed image, checked when the sequence is opened: there, and a regular file.
+void check_listed_image(const std::string& path, const char* what, const std::string& listed_by) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) {
+    throw InputError::at(path, fmt::format("{} image not found (listed by {})", what, listed_by));
+  }
+  if (!fs::is_regular_file(status)) {
+    throw InputError::at(
+        path, fmt::format("{} image is not a regular file (listed by {})", what, listed_by));
+  }
 }
 
 cv::Mat to_bgr8(const cv::Mat& image, const std::string& path) {
@@ -205,19 +256,18 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
 
   if (options.check_files_on_open) {
     for (const FramePair& pair : pairs_) {
-      if (!fs::exists(pair.rgb_path, ec)) {
-        throw InputError::at(pair.rgb_path, fmt::format("RGB image not found (listed by {})",
-                                                        association_description_));
-      }
-      if (!fs::exists(pair.depth_path, ec)) {
-        throw InputError::at(pair.depth_path, fmt::format("depth image not found (listed by {})",
-                                                          association_description_));
-      }
+      check_listed_image(pair.rgb_path, "RGB", association_description_);
+      check_listed_image(pair.depth_path, "depth", association_description_);
     }
   }
 
   const std::string groundtruth = (fs::path(dir_) / "groundtruth.txt").string();
-  if (fs::is_regular_file(groundtruth, ec)) groundtruth_path_ = groundtruth;
+  if (fs::is_regular_file(groundtruth, ec)) {
+    // Validated now, like the frame lists, so that a malformed line stops the run before its
+    // first frame instead of after its last.
+    if (options.check_files_on_open) read_tum_trajectory(groundtruth);
+    groundtruth_path_ = groundtruth;
+  }
   if (options.read_accelerometer) {
     const std::string accelerometer = (fs::path(dir_) / "accelerometer.txt").string();
     if (fs::is_regular_file(accelerometer, ec)) {
@@ -236,7 +286,11 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
 }
 
 void TumDataset::read_association_file(const std::string& path) {
+  constexpr double kFarPairS = 0.1;
   std::vector<double> rgb_stamps;
+  std::unordered_map<std::string, std::size_t> depth_lines;  // depth image -> its line
+  std::size_t far_pairs = 0;
+  std::size_t first_far_line = 0;
   for (const TextRow& row : read_text_table(path)) {
     if (row.fields.size() != 4) {
       throw InputError::at_line(
@@ -251,10 +305,26 @@ void TumDataset::read_association_file(const std::string& path) {
     pair.depth_timestamp_s = parse_stamp(row.fields[2], path, row.line);
     pair.depth_path = resolve(dir_, row.fields[3]);
     require_increasing(path, row.line, pair.rgb_timestamp_s, row.fields[0], rgb_stamps);
+    // associate.py pairs each depth image once: one listed twice is an edited or broken file.
+    const auto [earlier, first_use] = depth_lines.emplace(pair.depth_path, row.line);
+    if (!first_use) {
+      throw InputError::at_line(path, row.line,
+                                fmt::format("depth image {} is paired already on line {}",
+                                            row.fields[3], earlier->second));
+    }
+    const double gap_s = std::abs(pair.depth_timestamp_s - pair.rgb_timestamp_s);
+    if (gap_s > kFarPairS && far_pairs++ == 0) first_far_line = row.line;
     rgb_stamps.push_back(pair.rgb_timestamp_s);
     pairs_.push_back(std::move(pair));
   }
   if (pairs_.empty()) throw InputError::at(path, "no frames listed (empty list)");
+  if (far_pairs > 0) {
+    // Not an error: a file made with associate.py --offset pairs stamps of clocks that differ.
+    spdlog::warn(
+        "{}: {} of {} pairs have depth more than {} s from their colour image (first: "
+        "line {}); associate.py pairs within 0.02 s",
+        path, far_pairs, pairs_.size(), kFarPairS, first_far_line);
+  }
   association_description_ = fs::path(path).filename().string();
 }
 

@@ -90,7 +90,7 @@ class DenseMapper {
   void finish();
   /// Writes map.ot, map.bt, map.ply and map_top.png / map_oblique.png into `dir`, each whole or
   /// not at all (core/filesystem.h), and returns the paths written. A file that cannot be written
-  /// does not stop the others: its error message is appended to `errors`. Throws InputError when
+  /// does not stop the others: its error message is appended to `errors`. Throws OutputError when
   /// `dir` cannot be created.
   std::vector<std::string> write_outputs(const std::string& dir,
                                          std::vector<std::string>& errors) const;

@@ -138,6 +138,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
 
   // Every option is valid: from here on the run writes its outputs whatever happens.
   remove_earlier_outputs(out_dir);
+  if (options.on_start) options.on_start();
   RunOutcome outcome;
   std::exception_ptr error;
   Stopwatch wall;
@@ -287,6 +288,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   }
 
   const auto gt = dataset.groundtruth_path();
+  if (options.evaluate && gt && error == nullptr && camera_written &&
+      outcome.statistics.poses < 2) {
+    summary["evaluation_error"] = fmt::format(
+        "{} pose(s) estimated: the evaluation needs at least 2", outcome.statistics.poses);
+    spdlog::warn("evaluation skipped: {}", summary["evaluation_error"].get<std::string>());
+  }
   if (options.evaluate && gt && error == nullptr && camera_written &&
       outcome.statistics.poses >= 2) {
     // A malformed ground-truth file is bad input: the run ends with its error (exit code 2)

@@ -111,6 +111,25 @@ class OnnxSegmenter final : public Segmenter {
       const auto it = std::find(config_.class_names.begin(), config_.class_names.end(), name);
       dynamic_labels_.insert(static_cast<int>(it - config_.class_names.begin()));
     }
+    check_input_size();
+  }
+
+  /// One inference on a grey image of the configured input size, so that a size the model does
+  /// not take (an ONNX export fixes it) is a configuration error before the first frame instead
+  /// of an inference error in it.
+  void check_input_size() {
+    const cv::Mat grey(config_.input_height, config_.input_width, CV_8UC3, cv::Scalar::all(128));
+    net_.setInput(cv::dnn::blobFromImage(grey, 1.0, grey.size(), cv::Scalar(), true, false));
+    try {
+      net_.forward();
+    } catch (const cv::Exception& e) {
+      throw ConfigError::for_key(
+          "dynamic.segmentation.input_width/input_height",
+          fmt::format("the model {} does not take a {}x{} input (ONNX exports fix their input "
+                      "size; its file name usually says it): {}",
+                      model_path_, config_.input_width, config_.input_height,
+                      e.err.empty() ? e.what() : e.err));
+    }
   }
 
   SegmentationResult segment(const cv::Mat& bgr, const std::string&) override {

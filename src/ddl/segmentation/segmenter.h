@@ -33,7 +33,8 @@ struct SegmenterConfig {
   /// ONNX model; {W}x{H} in the name is not interpreted: input_width/height must match the model.
   /// 320x240 by default: 2.8x cheaper than 512x384 for 0.05 less IoU (docs/dynamics.md, Speed).
   std::string model_path = "models/espnetv2_s2.0_voc_320x240.onnx";  // in shared dir, else cwd
-  int input_width = 320;  // network input size in pixels (the ONNX files have fixed sizes)
+  int input_width = 320;  // network input size in pixels (the ONNX files have fixed sizes; one
+                          // trial inference when the model loads checks it)
   int input_height = 240;
   std::vector<std::string> class_names = voc_class_names();              // label index -> name
   std::vector<std::string> dynamic_classes = default_dynamic_classes();  // masked as dynamic

@@ -72,8 +72,8 @@ void ViewerConfig::validate() const {
     throw ConfigError::for_key("output_dir",
                                "the viewer needs a window, an output folder or a video file");
   }
-  if (!(video_fps > 0.0 && video_fps <= 1000.0)) {
-    throw ConfigError::for_key("video_fps", "must be in (0, 1000]");
+  if (!(video_fps >= 1.0 && video_fps <= 1000.0)) {  // OpenCV's Motion-JPEG writer's range
+    throw ConfigError::for_key("video_fps", "must be in [1, 1000]");
   }
   if (every_n_frames < 1) throw ConfigError::for_key("every_n_frames", "must be >= 1");
   if (map_width_px < 16) throw ConfigError::for_key("map_width_px", "must be >= 16");
@@ -189,7 +189,7 @@ void Viewer::run() {
           video.open(config_.video_path, cv::CAP_OPENCV_MJPEG,
                      cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), config_.video_fps, view.size());
           if (!video.isOpened()) {
-            throw InputError::at(config_.video_path, "cannot write the viewer video (.avi)");
+            throw OutputError::at(config_.video_path, "cannot write the viewer video (.avi)");
           }
         }
         video.write(view);

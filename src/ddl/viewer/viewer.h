@@ -39,7 +39,8 @@ struct ViewerConfig {
   bool window = false;             // show the views in a window (needs a display)
   std::string output_dir;          // write <output_dir>/frame_<index, 6 digits>.png; empty = none
   std::string video_path;          // write the views as a Motion-JPEG AVI video; empty = none
-  double video_fps = 30.0;         // the video's frame rate (a sequence's rate / every_n_frames)
+  double video_fps = 30.0;         // the video's frame rate, 1-1000 (a sequence's rate /
+                                   // every_n_frames)
   int every_n_frames = 1;          // draw the frames whose index is a multiple of this
   int map_width_px = 640;          // map panel width; its height is the frame panel's
   double map_focal_px = 420.0;     // focal length of the map panel's view camera
@@ -68,7 +69,7 @@ cv::Mat compose_view(const ViewFrame& frame, const MapSnapshot& map, const Viewe
 class Viewer {
  public:
   /// Starts the viewer thread. Throws ConfigError for an invalid config, Error when the window is
-  /// asked for without a display, InputError when the images' or the video's folder cannot be
+  /// asked for without a display, OutputError when the images' or the video's folder cannot be
   /// created.
   Viewer(const ViewerConfig& config, std::shared_ptr<const map::Map> map);
   ~Viewer();
