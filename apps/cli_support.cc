@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 
 #include "ddl/core/error.h"
 
@@ -58,8 +59,19 @@ int run_guarded(const std::function<int()>& body) {
 }
 
 std::string resolve_shared_dir(const std::string& flag_value) {
-  if (!flag_value.empty()) return flag_value;
-  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') return env;
+  // A folder the user named must be there; only the built-in default may be missing (a fresh
+  // machine: geometry-only dynamics, procedural people, with warnings).
+  const auto named = [](const std::string& dir, const char* by) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) {
+      throw InputError::at(dir, fmt::format("shared data folder ({}) not found", by));
+    }
+    return dir;
+  };
+  if (!flag_value.empty()) return named(flag_value, "--shared-dir");
+  if (const char* env = std::getenv("DDL_SHARED_DIR"); env != nullptr && *env != '\0') {
+    return named(env, "$DDL_SHARED_DIR");
+  }
   return "../shared";
 }
 

@@ -16,7 +16,8 @@ enum ExitCode : int { kOk = 0, kFailure = 1, kBadInput = 2, kInterrupted = 130 }
 /// the matching exit code. Never lets an exception escape to terminate().
 int run_guarded(const std::function<int()>& body);
 
-/// The shared data folder: the flag value if given, else $DDL_SHARED_DIR, else ../shared.
+/// The shared data folder: the flag value if given, else $DDL_SHARED_DIR, else ../shared. A folder
+/// named by the flag or the variable must exist (InputError); the default may be missing.
 std::string resolve_shared_dir(const std::string& flag_value);
 
 /// Installs SIGINT/SIGTERM handlers that set the returned flag (first signal) so long work stops

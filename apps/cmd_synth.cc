@@ -70,6 +70,9 @@ synthetic::SequenceConfig config_for(const synthetic::Preset& preset, const Synt
   } else if (!preset.background_in_shared.empty()) {
     config.background_dir = (fs::path(shared) / preset.background_in_shared).string();
   }
+  if (!args.people_dir.empty() && !fs::is_directory(fs::path(args.people_dir) / "images")) {
+    throw InputError::at(args.people_dir, "--people-dir: no images/ folder of person photos");
+  }
   if (config.people != synthetic::PeopleScenario::kNone && !config.people_dir.empty() &&
       !fs::is_directory(fs::path(config.people_dir) / "images")) {
     spdlog::warn("synth: no person photos in {} - using procedural silhouettes", config.people_dir);
@@ -193,13 +196,15 @@ void add_synth_command(CLI::App& app, int& exit_code) {
                   "Shared data folder (default: $DDL_SHARED_DIR, else ../shared)");
   cmd->add_flag("--procedural", args->procedural,
                 "Use no photos at all: procedural posters and silhouettes (as on a fresh machine)");
-  cmd->add_option("--preview", args->preview,
-                  "Also write a side-by-side picture (rgb | depth | mask | background) of one "
-                  "frame to this PNG");
+  CLI::Option* preview =
+      cmd->add_option("--preview", args->preview,
+                      "Also write a side-by-side picture (rgb | depth | mask | background) of one "
+                      "frame to this PNG");
   cmd->add_option("--preview-frame", args->preview_frame,
                   "Frame of the preview (default: the middle one)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--preview-only", args->preview_only, "Write only the preview, no sequence");
+  cmd->add_flag("--preview-only", args->preview_only, "Write only the preview, no sequence")
+      ->needs(preview);
   cmd->add_option("--png-compression", args->png_compression, "zlib level of the PNGs, 0-9")
       ->check(CLI::Range(0, 9))
       ->capture_default_str();

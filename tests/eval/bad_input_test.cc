@@ -10,6 +10,7 @@
 #include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/eval/evaluate.h"
+#include "ddl/io/trajectory_io.h"
 #include "eval_test_support.h"
 
 namespace ddl::eval {
@@ -90,12 +91,19 @@ TEST_F(BadInputTest, EmptyFile) {
   expect_contains(msg, "empty");
 }
 
-TEST_F(BadInputTest, NonIncreasingStampsNameFileAndLine) {
+// Stamps out of order or repeated are read as TUM's evaluate_ate.py / evaluate_rpe.py read them
+// (a dict keyed by stamp, then sorted): in time order, the last line of a repeated stamp kept.
+TEST_F(BadInputTest, StampsOutOfOrderAreReadAsTheTumToolsReadThem) {
   test::write_text(inputs_.estimate_path,
-                   "100.0 0 0 0 0 0 0 1\n100.2 0 0 0 0 0 0 1\n100.1 0 0 0 0 0 0 1\n");
-  const std::string msg = input_error_of(inputs_);
-  expect_contains(msg, inputs_.estimate_path + ":3:");
-  expect_contains(msg, "does not increase");
+                   "100.0 0 0 0 0 0 0 1\n100.2 2 0 0 0 0 0 1\n100.1 1 0 0 0 0 0 1\n"
+                   "100.2 3 0 0 0 0 0 1\n");
+  const io::Trajectory t = io::read_tum_trajectory(inputs_.estimate_path);
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[0].timestamp_s, 100.0);
+  EXPECT_EQ(t[1].timestamp_s, 100.1);
+  EXPECT_EQ(t[1].t_w_c.x(), 1.0);
+  EXPECT_EQ(t[2].timestamp_s, 100.2);
+  EXPECT_EQ(t[2].t_w_c.x(), 3.0) << "the last line of stamp 100.2";
 }
 
 TEST_F(BadInputTest, NoOverlappingStampsNamesBothFiles) {

@@ -4,6 +4,7 @@
 #include <fmt/os.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -30,6 +31,8 @@ SE3 StampedPose::T_w_c() const {
 Trajectory read_tum_trajectory(const std::string& path) {
   Trajectory out;
   std::size_t skipped_nan = 0;
+  std::size_t out_of_order = 0;  // lines whose stamp is not above the line before
+  std::size_t first_out_of_order = 0;
   for (const TextRow& row : read_text_table(path)) {
     if (row.fields.size() != 8) {
       throw InputError::at_line(
@@ -51,9 +54,8 @@ Trajectory read_tum_trajectory(const std::string& path) {
       if (!std::isfinite(x)) throw InputError::at_line(path, row.line, "infinite value");
     }
     if (!out.empty() && v[0] <= out.back().timestamp_s) {
-      throw InputError::at_line(path, row.line,
-                                fmt::format("timestamp {} does not increase (previous {})",
-                                            row.fields[0], out.back().timestamp_s));
+      ++out_of_order;
+      if (first_out_of_order == 0) first_out_of_order = row.line;
     }
     StampedPose p;
     p.timestamp_s = v[0];
@@ -63,6 +65,27 @@ Trajectory read_tum_trajectory(const std::string& path) {
   }
   if (skipped_nan > 0) spdlog::warn("{}: skipped {} line(s) holding NaN", path, skipped_nan);
   if (out.empty()) throw InputError::at(path, "no poses (empty trajectory file)");
+  if (out_of_order > 0) {
+    // As TUM's tools read the file (a dict keyed by stamp, then sorted): in time order, the last
+    // line of a repeated stamp kept.
+    std::stable_sort(out.begin(), out.end(), [](const StampedPose& a, const StampedPose& b) {
+      return a.timestamp_s < b.timestamp_s;
+    });
+    Trajectory unique;
+    unique.reserve(out.size());
+    for (const StampedPose& p : out) {
+      if (!unique.empty() && unique.back().timestamp_s == p.timestamp_s) {
+        unique.back() = p;
+      } else {
+        unique.push_back(p);
+      }
+    }
+    spdlog::warn(
+        "{}: {} line(s) do not increase in time (first: line {}); read as TUM's tools do, sorted "
+        "by time with the last line of a repeated stamp kept ({} poses)",
+        path, out_of_order, first_out_of_order, unique.size());
+    out = std::move(unique);
+  }
   return out;
 }
 
