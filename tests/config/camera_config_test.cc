@@ -12,6 +12,7 @@
 
 #include "../io/test_sequence.h"
 #include "config_test_util.h"
+#include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/error.h"
 
 namespace ddl::config {
@@ -212,6 +213,23 @@ TEST(CameraConfig, InvalidValuesNameFileAndKey) {
   dir.write("zero_depth.yaml", replaced(kValid, "depth_factor: 1000.0", "depth_factor: 0"));
   EXPECT_THAT(error_of<ConfigError>([&] { load_camera(dir.file("zero_depth.yaml")); }),
               HasSubstr("camera.depth_factor"));
+
+  // Values no camera has (review, stop 24): they ran with nothing tracked and exit code 0.
+  dir.write("tiny_depth.yaml", replaced(kValid, "depth_factor: 1000.0", "depth_factor: 1e-300"));
+  EXPECT_THAT(error_of<ConfigError>([&] { load_camera(dir.file("tiny_depth.yaml")); }),
+              HasSubstr("camera.depth_factor"));
+  for (const char* fx : {"fx: 1e300", "fx: 1e-9"}) {
+    dir.write("fx.yaml", replaced(kValid, "fx: 500.0", fx));
+    EXPECT_THAT(error_of<ConfigError>([&] { load_camera(dir.file("fx.yaml")); }),
+                HasSubstr("camera.fx': gives a horizontal field of view"))
+        << fx;
+  }
+  dir.write("valid.yaml", kValid);
+  camera::PinholeCamera wild = load_camera(dir.file("valid.yaml"));
+  EXPECT_NO_THROW(camera::Undistorter{wild});
+  wild.distortion = {1e6, 0, 0, 0, 0};
+  EXPECT_THAT(error_of<ConfigError>([&] { camera::Undistorter{wild}; }),
+              HasSubstr("camera.distortion"));
 }
 
 TEST(CameraConfig, SyntaxErrorNamesFileAndLine) {

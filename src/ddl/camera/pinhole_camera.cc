@@ -25,13 +25,30 @@ void PinholeCamera::validate() const {
   require(height > 0 && height <= 16384, "camera.height", height, "must be in 1..16384");
   require(std::isfinite(fx) && fx > 0, "camera.fx", fx, "must be a positive focal length");
   require(std::isfinite(fy) && fy > 0, "camera.fy", fy, "must be a positive focal length");
+  // A focal length no lens has: the field of view across the image must be 1-170 degrees.
+  const auto fov_deg = [](double size, double f) {
+    return 2.0 * std::atan(0.5 * size / f) * 180.0 / M_PI;
+  };
+  const double fov_x = fov_deg(width, fx);
+  const double fov_y = fov_deg(height, fy);
+  require(fov_x >= 1.0 && fov_x <= 170.0, "camera.fx", fx,
+          fmt::format("gives a horizontal field of view of {:.3g} degrees over {} px; must be "
+                      "1-170 degrees",
+                      fov_x, width)
+              .c_str());
+  require(fov_y >= 1.0 && fov_y <= 170.0, "camera.fy", fy,
+          fmt::format("gives a vertical field of view of {:.3g} degrees over {} px; must be "
+                      "1-170 degrees",
+                      fov_y, height)
+              .c_str());
   require(std::isfinite(cx) && cx >= 0 && cx <= width, "camera.cx", cx,
           "must lie inside the image");
   require(std::isfinite(cy) && cy >= 0 && cy <= height, "camera.cy", cy,
           "must lie inside the image");
   for (double d : distortion) require(std::isfinite(d), "camera.distortion", d, "must be finite");
-  require(std::isfinite(depth_factor) && depth_factor > 0, "camera.depth_factor", depth_factor,
-          "must be positive (raw units per metre)");
+  // 16-bit depth: below 0.1 units per metre one unit would be over 10 m.
+  require(std::isfinite(depth_factor) && depth_factor >= 0.1 && depth_factor <= 1e6,
+          "camera.depth_factor", depth_factor, "must be in 0.1..1e6 (raw units per metre)");
   require(std::isfinite(fps) && fps > 0, "camera.fps", fps, "must be positive");
 }
 
@@ -57,6 +74,15 @@ Undistorter::Undistorter(const PinholeCamera& camera) : active_(camera.has_disto
   const cv::Mat everywhere(camera.height, camera.width, CV_8UC1, cv::Scalar(255));
   cv::remap(everywhere, source_area_, map_nearest_, cv::Mat(), cv::INTER_NEAREST,
             cv::BORDER_CONSTANT, cv::Scalar(0));
+  // Coefficients no lens has send most of the undistorted image outside the sensor.
+  const double covered = cv::countNonZero(source_area_) / static_cast<double>(everywhere.total());
+  if (covered < 0.5) {
+    throw ConfigError::for_key(
+        "camera.distortion",
+        fmt::format("leaves only {:.0f}% of the undistorted image with a source pixel (at least "
+                    "50% expected): coefficients no lens has?",
+                    100.0 * covered));
+  }
 }
 
 cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {
