@@ -232,7 +232,10 @@ Vocabulary train_vocabulary(const std::vector<cv::Mat>& image_descriptors,
     if (mat.rows > 0) ++local_stats.images;
   }
   image_begin.push_back(all.size());
-  if (all.empty()) throw Error("vocabulary training: no descriptors in the training images");
+  if (all.empty()) {
+    // The images are the input: blank or featureless pictures are bad input (exit code 2).
+    throw InputError("vocabulary training: no ORB features in any of the training images");
+  }
   if (all.size() >= std::numeric_limits<std::uint32_t>::max()) {
     throw Error(fmt::format("vocabulary training: too many descriptors ({})", all.size()));
   }

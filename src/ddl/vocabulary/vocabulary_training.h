@@ -54,7 +54,7 @@ struct TrainingStats {
 /// descriptor whose descent reaches word w (log N for a word no training descriptor reaches);
 /// 1 for the tf and binary weightings.
 ///
-/// Throws ddl::ConfigError for an invalid config, ddl::Error when there are no descriptors,
+/// Throws ddl::ConfigError for an invalid config, ddl::InputError when there are no descriptors,
 /// ddl::Interrupted when stopped through hooks.stop.
 Vocabulary train_vocabulary(const std::vector<cv::Mat>& image_descriptors,
                             const VocabularyConfig& config, const TrainingHooks& hooks = {},
