@@ -37,6 +37,7 @@ struct EvalDenseArgs {
 };
 
 int run_eval_dense(const EvalDenseArgs& args) {
+  args.options.validate();  // before the octree is read: a bad option costs no wait
   eval::DenseEvalInputs inputs = args.inputs;
   inputs.camera = config::resolve_dataset_camera(inputs.sequence_dir, args.camera);
   if (!args.no_map) {
