@@ -123,6 +123,8 @@ RunResult run_sequence_command(const RunArgs& args,
       io::parse_association_source(args.associations, "--associations");
   dataset_options.camera =
       config::resolve_dataset_camera(args.sequence, args.camera, dataset_options.kind);
+  // A run that does not evaluate does not depend on groundtruth.txt.
+  dataset_options.sequence.check_groundtruth_on_open = !args.no_eval;
   // Only upright segmentation reads the accelerometer (docs/dynamics.md).
   dataset_options.sequence.read_accelerometer = config.dynamic.enabled &&
                                                 config.dynamic.use_segmentation &&

@@ -306,13 +306,10 @@ int run_eval(const EvalArgs& args) {
   }
   const std::atomic<bool>& stop = install_stop_handler();
   const std::vector<std::string> images = collect_images(args.images, {}, args.max_images);
-  if (images.size() <= static_cast<std::size_t>(args.keyframe_every)) {
-    // Every keyframe-every-th image is a keyframe, the others query them: fewer images leave
-    // nothing to query.
-    throw InputError(
-        fmt::format("vocab eval --images: {} image(s); the evaluation needs more "
-                    "than --keyframe-every ({})",
-                    images.size(), args.keyframe_every));
+  if (images.size() < 2) {
+    // Image 0 is a keyframe and the images that are not keyframes query: one image queries none.
+    throw InputError(fmt::format(
+        "vocab eval --images: {} image(s); the evaluation needs at least 2", images.size()));
   }
   const std::vector<cv::Mat> descriptors =
       extract_descriptors(images, orb_config, args.threads, stop);

@@ -291,6 +291,11 @@ TEST(TumDataset, TruncatedJpegIsAnError) {
   };
   write(jpeg.size());
   EXPECT_EQ(dataset.frame(1).rgb.size(), cv::Size(32, 24));
+  // Bytes after the end-of-image marker (a writer's trailer) are ignored, as decoders do.
+  jpeg.insert(jpeg.end(), 200, 0x55);
+  write(jpeg.size());
+  EXPECT_EQ(dataset.frame(1).rgb.size(), cv::Size(32, 24));
+  jpeg.resize(jpeg.size() - 200);
   write(jpeg.size() * 2 / 3);
   const std::string msg = input_error_of([&] { dataset.frame(1); });
   EXPECT_THAT(msg, HasSubstr(rgb_path));
@@ -371,6 +376,10 @@ TEST(TumDataset, AMalformedGroundTruthIsFoundWhenOpened) {
   dir.write("groundtruth.txt", "# gt\n1000.0 0 0 0 0 0 0 1\n1000.01 0.1 0 0 0 0 0\n");
   const std::string msg = input_error_of([&] { TumDataset(dir.path(), tiny_camera()); });
   EXPECT_THAT(msg, HasSubstr(dir.file("groundtruth.txt") + ":3"));
+  // A run that does not evaluate (run --no-eval) does not depend on the file.
+  SequenceOptions no_eval;
+  no_eval.check_groundtruth_on_open = false;
+  EXPECT_EQ(TumDataset(dir.path(), tiny_camera(), no_eval).size(), 2u);
 }
 
 TEST(TumDataset, IndexOutOfRangeAndBadOptions) {

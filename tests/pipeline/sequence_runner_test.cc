@@ -187,13 +187,22 @@ TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
   int starts = 0;
   options.on_start = [&] {
     ++starts;
-    EXPECT_FALSE(fs::exists(out / "map.ot")) << "called before the earlier outputs went";
+    EXPECT_TRUE(fs::exists(out / "map.ot")) << "called after the earlier outputs went";
   };
   options.first_frame = 100;
   EXPECT_THROW(run_sequence(dataset, system, options), ConfigError);
   EXPECT_TRUE(fs::exists(out / "map.ot"));
   EXPECT_TRUE(fs::exists(out / "summary.json"));
   EXPECT_EQ(starts, 0);
+  // A setup output that cannot be written ends the run with the earlier outputs kept.
+  options.first_frame = 0;
+  options.on_start = [&] { throw OutputError::at("config.yaml", "cannot write"); };
+  EXPECT_THROW(run_sequence(dataset, system, options), OutputError);
+  EXPECT_TRUE(fs::exists(out / "map.ot"));
+  options.on_start = [&] {
+    ++starts;
+    EXPECT_TRUE(fs::exists(out / "map.ot")) << "called after the earlier outputs went";
+  };
   options.first_frame = 0;
   run_sequence(dataset, system, options);
   EXPECT_EQ(starts, 1);

@@ -28,16 +28,16 @@ VocabularyConfig small_config(int k, int levels, std::uint64_t seed = 1) {
   return c;
 }
 
-// Four well separated prototypes (random 256-bit strings are ~128 bits apart), 60 observations
-// each with 12 of 256 bits flipped. One level of 4-means must recover the four groups, and the
-// majority vote must give back every prototype bit for bit (a bit is wrong only if > 30 of 60
-// observations flipped it; each flips it with probability 12/256).
 // Featureless training images are bad input (exit code 2), not a failure of the program.
 TEST(VocabularyTraining, NoDescriptorsAtAllIsAnInputError) {
   const std::vector<cv::Mat> none(3, cv::Mat(0, 32, CV_8UC1));
   EXPECT_THROW(train_vocabulary(none, VocabularyConfig{}), InputError);
 }
 
+// Four well separated prototypes (random 256-bit strings are ~128 bits apart), 60 observations
+// each with 12 of 256 bits flipped. One level of 4-means must recover the four groups, and the
+// majority vote must give back every prototype bit for bit (a bit is wrong only if > 30 of 60
+// observations flipped it; each flips it with probability 12/256).
 TEST(VocabularyTraining, KMeansRecoversSeparableClustersAndTheirCentres) {
   std::mt19937_64 rng(7);
   const std::vector<Descriptor> prototypes = random_descriptors(4, rng);

@@ -50,6 +50,36 @@ void PinholeCamera::validate() const {
   require(std::isfinite(depth_factor) && depth_factor >= 0.1 && depth_factor <= 1e6,
           "camera.depth_factor", depth_factor, "must be in 0.1..1e6 (raw units per metre)");
   require(std::isfinite(fps) && fps > 0, "camera.fps", fps, "must be positive");
+  if (has_distortion()) {
+    // Coefficients no lens has send most of the undistorted image outside the sensor. Each
+    // undistorted pixel of a 64 x 48 grid is distorted as the undistortion maps do (OpenCV's
+    // model) and must land on the sensor for at least half of them.
+    const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2];
+    const double p2 = distortion[3], k3 = distortion[4];
+    int inside = 0;
+    constexpr int kCols = 64, kRows = 48;
+    for (int r = 0; r < kRows; ++r) {
+      for (int c = 0; c < kCols; ++c) {
+        const double x = ((c + 0.5) * width / kCols - cx) / fx;
+        const double y = ((r + 0.5) * height / kRows - cy) / fy;
+        const double r2 = x * x + y * y;
+        const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+        const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+        const double u = fx * xd + cx;
+        const double v = fy * yd + cy;
+        inside += u >= 0.0 && u < width && v >= 0.0 && v < height;
+      }
+    }
+    const double covered = inside / static_cast<double>(kCols * kRows);
+    if (covered < 0.5) {
+      throw ConfigError::for_key(
+          "camera.distortion",
+          fmt::format("leaves only {:.0f}% of the undistorted image with a source pixel (at least "
+                      "50% expected): coefficients no lens has?",
+                      100.0 * covered));
+    }
+  }
 }
 
 PinholeCamera PinholeCamera::undistorted() const {
@@ -74,15 +104,6 @@ Undistorter::Undistorter(const PinholeCamera& camera) : active_(camera.has_disto
   const cv::Mat everywhere(camera.height, camera.width, CV_8UC1, cv::Scalar(255));
   cv::remap(everywhere, source_area_, map_nearest_, cv::Mat(), cv::INTER_NEAREST,
             cv::BORDER_CONSTANT, cv::Scalar(0));
-  // Coefficients no lens has send most of the undistorted image outside the sensor.
-  const double covered = cv::countNonZero(source_area_) / static_cast<double>(everywhere.total());
-  if (covered < 0.5) {
-    throw ConfigError::for_key(
-        "camera.distortion",
-        fmt::format("leaves only {:.0f}% of the undistorted image with a source pixel (at least "
-                    "50% expected): coefficients no lens has?",
-                    100.0 * covered));
-  }
 }
 
 cv::Mat Undistorter::undistort_rgb(const cv::Mat& rgb) const {

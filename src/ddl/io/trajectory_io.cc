@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 #include "ddl/core/error.h"
@@ -33,6 +34,7 @@ Trajectory read_tum_trajectory(const std::string& path) {
   std::size_t skipped_nan = 0;
   std::size_t out_of_order = 0;  // lines whose stamp is not above the line before
   std::size_t first_out_of_order = 0;
+  double latest_s = -std::numeric_limits<double>::infinity();  // the latest stamp so far
   for (const TextRow& row : read_text_table(path)) {
     if (row.fields.size() != 8) {
       throw InputError::at_line(
@@ -53,10 +55,11 @@ Trajectory read_tum_trajectory(const std::string& path) {
     for (double x : v) {
       if (!std::isfinite(x)) throw InputError::at_line(path, row.line, "infinite value");
     }
-    if (!out.empty() && v[0] <= out.back().timestamp_s) {
+    if (!out.empty() && v[0] <= latest_s) {
       ++out_of_order;
       if (first_out_of_order == 0) first_out_of_order = row.line;
     }
+    latest_s = std::max(latest_s, v[0]);
     StampedPose p;
     p.timestamp_s = v[0];
     p.t_w_c = Vec3d(v[1], v[2], v[3]);

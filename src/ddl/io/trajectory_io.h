@@ -1,9 +1,9 @@
 #pragma once
 // TUM trajectory files: one pose per line, `timestamp tx ty tz qx qy qz qw`, T_w_c (camera in the
-// world frame), '#' comments. Read as TUM's scripts read them (space, tab or comma separated) but
-// strictly: a malformed line, a missing file, an empty file or non-increasing timestamps throw
-// ddl::InputError naming file and line. Lines holding NaN are skipped with a warning, as TUM's
-// evaluate_rpe.py does.
+// world frame), '#' comments. Read as TUM's scripts read them (space, tab or comma separated;
+// stamps out of order sorted, the last line of a repeated stamp kept, with a warning) but strictly:
+// a malformed line, a missing file or an empty file throw ddl::InputError naming file and line.
+// Lines holding NaN are skipped with a warning, as TUM's evaluate_rpe.py does.
 
 #include <string>
 #include <vector>
@@ -28,8 +28,8 @@ using Trajectory = std::vector<StampedPose>;
 
 Trajectory read_tum_trajectory(const std::string& path);
 
-/// Writes full precision (shortest round-trip decimal), creating parent folders. Throws
-/// ddl::InputError if the file cannot be written.
+/// Writes full precision (shortest round-trip decimal), creating parent folders, whole or not at
+/// all (core/filesystem.h). Throws ddl::OutputError if the file cannot be written.
 void write_tum_trajectory(const std::string& path, const Trajectory& trajectory,
                           const std::string& header_comment = {});
 

@@ -86,13 +86,14 @@ std::string describe_size(const cv::Mat& image) {
   return fmt::format("{}x{}", image.cols, image.rows);
 }
 
-/// Whether a JPEG file's bytes end with its end-of-image marker (FF D9), allowing for the padding
-/// some writers put after it. libjpeg decodes a cut-off file without an error (it only prints
-/// "Premature end of JPEG file" and fills the rest grey), so OpenCV would hand back a picture.
+/// Whether a JPEG file's bytes hold an end-of-image marker (FF D9) after the start; whatever
+/// follows it (padding, a writer's trailer) is allowed, as decoders ignore it. libjpeg decodes a
+/// cut-off file without an error (it only prints "Premature end of JPEG file" and fills the rest
+/// grey), so OpenCV would hand back a picture. Entropy-coded data stuffs every FF with 00, so the
+/// pair marks the end; a cut file whose EXIF thumbnail holds one still passes (a known gap).
 bool jpeg_has_end_marker(const std::vector<unsigned char>& bytes) {
-  const std::size_t tail = std::min<std::size_t>(bytes.size(), 64);
-  for (std::size_t i = bytes.size() - tail; i + 1 < bytes.size(); ++i) {
-    if (bytes[i] == 0xFF && bytes[i + 1] == 0xD9) return true;
+  for (std::size_t i = bytes.size() - 1; i >= 3; --i) {
+    if (bytes[i - 1] == 0xFF && bytes[i] == 0xD9) return true;
   }
   return false;
 }
@@ -265,7 +266,7 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
   if (fs::is_regular_file(groundtruth, ec)) {
     // Validated now, like the frame lists, so that a malformed line stops the run before its
     // first frame instead of after its last.
-    if (options.check_files_on_open) read_tum_trajectory(groundtruth);
+    if (options.check_groundtruth_on_open) read_tum_trajectory(groundtruth);
     groundtruth_path_ = groundtruth;
   }
   if (options.read_accelerometer) {

@@ -57,7 +57,10 @@ struct SequenceOptions {
                                     // with kAuto also selects this file.
   double max_difference_s = 0.02;   // associate.py --max_difference, seconds (computed pairs)
   bool check_files_on_open = true;  // fail at construction when a listed image file is missing
-                                    // (or no regular file) or groundtruth.txt is malformed
+                                    // (or no regular file)
+  /// Read groundtruth.txt at construction, so that a malformed line stops a run before its first
+  /// frame; off for a run that does not evaluate (it then does not depend on the file).
+  bool check_groundtruth_on_open = true;
   /// Load <dir>/accelerometer.txt, when present, into each frame's up direction (RgbdFrame::up_c;
   /// a malformed file is then an error). Off, the file is not read: a run that does not use it
   /// does not depend on it.

@@ -137,8 +137,9 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   const std::size_t total = end - begin;
 
   // Every option is valid: from here on the run writes its outputs whatever happens.
-  remove_earlier_outputs(out_dir);
+  // The caller's own outputs first: if one cannot be written, the earlier run's outputs stay.
   if (options.on_start) options.on_start();
+  remove_earlier_outputs(out_dir);
   RunOutcome outcome;
   std::exception_ptr error;
   Stopwatch wall;

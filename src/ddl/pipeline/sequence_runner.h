@@ -39,9 +39,10 @@ struct RunOptions {
   /// When set: called from the calling thread with every frame and what process() reported
   /// (a viewer, say). Returning false stops the run after that frame, like `stop`.
   std::function<bool(const io::RgbdFrame&, const FrameOutcome&)> on_frame;
-  /// When set: called once every option has been found valid and the earlier run's outputs are
-  /// gone, before the first frame (the caller's own outputs, such as the effective
-  /// configuration, so that a run refused at its start leaves the folder as it was).
+  /// When set: called once every option has been found valid, before the earlier run's listed
+  /// outputs are removed and before the first frame (the caller's own outputs, such as the
+  /// effective configuration, so that a run refused at its start leaves the folder as it was, and
+  /// one whose setup output cannot be written keeps the earlier run's outputs).
   std::function<void()> on_start;
 };
 

@@ -1,7 +1,9 @@
 #include "ddl/synthetic/png_writer.h"
 
+#include <fmt/format.h>
 #include <zlib.h>
 
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 
@@ -106,7 +108,9 @@ void write_png_file(const std::string& path, const cv::Mat& image, int level) {
   file.write(reinterpret_cast<const char*>(bytes.data()),
              static_cast<std::streamsize>(bytes.size()));
   file.flush();
-  if (!file) throw InputError::at(path, "cannot write the image");
+  if (!file) {
+    throw OutputError::at(path, fmt::format("cannot write the image: {}", std::strerror(errno)));
+  }
 }
 
 }  // namespace ddl::synthetic

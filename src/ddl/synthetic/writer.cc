@@ -1,7 +1,10 @@
 // Writing a sequence in the TUM RGB-D layout, plus the extra ground truth.
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -25,7 +28,9 @@ void write_text(const std::string& path, const std::string& text) {
   std::ofstream file(path, std::ios::binary | std::ios::trunc);
   file << text;
   file.flush();
-  if (!file) throw InputError::at(path, "cannot write the file");
+  if (!file) {
+    throw OutputError::at(path, fmt::format("cannot write the file: {}", std::strerror(errno)));
+  }
 }
 
 std::string yaml_double(double v) { return fmt::format("{}", v); }
