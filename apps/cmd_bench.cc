@@ -64,7 +64,9 @@ std::vector<Sequence> collect_sequences(const BenchArgs& args, json& skipped) {
   for (const std::string& s : args.sequences) {
     const fs::path dir = fs::path(s).lexically_normal();
     check(dir);
-    const fs::path name = dir.has_filename() ? dir.filename() : dir.parent_path().filename();
+    // The folder's own name, also for "." or "seq/": the row's label and its output folder.
+    const fs::path full = fs::absolute(dir).lexically_normal();
+    const fs::path name = full.has_filename() ? full.filename() : full.parent_path().filename();
     out.push_back({name.string(), dir.string()});
   }
   if (!args.suite.empty()) {
@@ -134,10 +136,10 @@ int bench(const BenchArgs& args) {
   // The settings are the same for every sequence: a bad --config, --mode or --segmentation is
   // reported once, as bad input (exit 2), before any run.
   make_system_config(args.run);
-  if (!args.run.camera.empty() && !sequences.empty()) {
-    config::resolve_dataset_camera(sequences.front().dir, args.run.camera,
-                                   io::parse_dataset_kind(args.run.dataset_kind, "--dataset-kind"));
-  }
+  // Every sequence's camera too (from --camera, its folder name or its camera.yaml): a folder
+  // whose camera cannot be told stops the bench before its first run, not halfway through.
+  const io::DatasetKind kind = io::parse_dataset_kind(args.run.dataset_kind, "--dataset-kind");
+  for (const Sequence& s : sequences) config::resolve_dataset_camera(s.dir, args.run.camera, kind);
   const auto vocabulary = load_vocabulary(resolve_vocabulary(args.run.vocabulary_path));
   const json settings = settings_json(args, sequences.size());
   std::vector<eval::BenchmarkRow> rows;

@@ -32,6 +32,7 @@ int run_eval(const EvalArgs& args) {
   const eval::EvalResult result = eval::evaluate(args.inputs, options);
   std::fputs(eval::format_report(result).c_str(), stdout);
   std::fflush(stdout);
+  if (!result.rpe_error.empty()) spdlog::warn("RPE unavailable: {}", result.rpe_error);
   if (!args.json_path.empty()) {
     eval::write_json_report(args.json_path, result);
     spdlog::info("wrote {}", args.json_path);

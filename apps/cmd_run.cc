@@ -151,8 +151,12 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.on_start = [&] {
     write_file_atomically(fs::path(args.output_dir) / "config.yaml", "the effective configuration",
                           config::system_config_to_yaml(config));
-    write_file_atomically(fs::path(args.output_dir) / "camera.yaml", "the camera of the frames",
-                          config::camera_to_yaml(dataset->camera()));
+    // The calibration of the sequence's stored images, distortion included: `--camera` with this
+    // file runs the sequence again as this run did (the frames are undistorted to the same
+    // intrinsics). Until stop 24 it was the undistorted camera, which skipped the undistortion.
+    write_file_atomically(fs::path(args.output_dir) / "camera.yaml",
+                          "the camera of the sequence's images",
+                          config::camera_to_yaml(*dataset_options.camera));
   };
   // Ground-truth dynamic masks (sequences written by `ddl_slam synth`): mask quality metrics.
   std::unique_ptr<pipeline::MaskEvaluator> mask_evaluator;
@@ -213,9 +217,15 @@ int run(const RunArgs& args) {
       s["relocalizations"].get<std::size_t>());
   if (outcome.summary.contains("evaluation")) {
     const auto& ev = outcome.summary["evaluation"];
+    // The RPE may be unavailable (a run shorter than its delta): the ATE still is.
+    const auto number = [](const nlohmann::json& object, const char* key) {
+      return object.is_object() && object.contains(key) && object[key].is_number()
+                 ? object[key].get<double>()
+                 : NAN;
+    };
     std::printf("ATE RMSE %.4f m, RPE %.4f m/s %.3f deg/s, tracked ratio %.3f\n",
-                ev["ate"]["rmse_m"].get<double>(), ev["rpe"]["trans_rmse_m_per_s"].get<double>(),
-                ev["rpe"]["rot_rmse_deg_per_s"].get<double>(), ev["tracked_ratio"].get<double>());
+                number(ev["ate"], "rmse_m"), number(ev["rpe"], "trans_rmse_m_per_s"),
+                number(ev["rpe"], "rot_rmse_deg_per_s"), number(ev, "tracked_ratio"));
   }
   if (outcome.summary.contains("masks")) {
     const auto& m = outcome.summary["masks"];

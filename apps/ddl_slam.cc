@@ -1,5 +1,6 @@
 // ddl_slam: the single command-line entry point. Thin: parses flags, calls the libraries.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -19,6 +20,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
   app.parse_complete_callback([&] { spdlog::set_level(spdlog::level::from_str(log_level)); });
+  // The log is diagnostics: it goes to stderr, beside the progress, so that stdout holds only what
+  // a command reports (eval's report, bench's tables, run's summary line) for a script to read.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("ddl_slam"));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
 
   int exit_code = ddl::app::kOk;

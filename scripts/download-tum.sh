@@ -7,29 +7,39 @@
 # Sequences (TUM RGB-D benchmark, Sturm et al., IROS 2012, CC BY 4.0):
 #   rgbd_dataset_freiburg3_walking_xyz, _walking_static, _walking_rpy, _walking_halfsphere,
 #   rgbd_dataset_freiburg3_sitting_static
-# from https://cvg.cit.tum.de/rgbd/dataset/freiburg3/<name>.tgz (the official download location;
+# and with --all also the other sequences the synthetic presets mirror (docs/synthetic.md):
+#   rgbd_dataset_freiburg3_sitting_halfsphere, rgbd_dataset_freiburg2_desk_with_person
+# from https://cvg.cit.tum.de/rgbd/dataset/freiburgN/<name>.tgz (the official download location;
 # the older host vision.in.tum.de serves the same paths and is tried when the first one fails).
 #
-# Usage: scripts/download-tum.sh [--out DIR] [--keep-archives] [--dry-run] [--ddl-slam PATH]
-#   --out DIR         where the sequence folders go (default data/tum)
+# Usage: scripts/download-tum.sh [--out DIR] [--all] [--keep-archives] [--dry-run] [--ddl-slam PATH]
+#   --out DIR         where the sequence folders go (default: data/tum in the repository; a
+#                     relative DIR is taken from the folder you run the script in)
+#   --all             also the two sequences above that are not in the paper's Table 1
 #   --keep-archives   keep the .tgz files next to the folders
 #   --dry-run         print the URLs and the bench command, download nothing
 #   --ddl-slam PATH   the binary shown in the bench command (default build/release/apps/ddl_slam)
 # A sequence whose folder already holds rgb.txt and groundtruth.txt is not downloaded again.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+caller_dir="$PWD"
+repo="$(cd "$(dirname "$0")/.." && pwd)"
 
-out=data/tum
+out="$repo/data/tum"
+all=0
 keep=0
 dry_run=0
-ddl_slam=build/release/apps/ddl_slam
+ddl_slam="$repo/build/release/apps/ddl_slam"
+from_caller() {  # a path as given on the command line, absolute
+  case "$1" in /*) echo "$1" ;; *) echo "$caller_dir/$1" ;; esac
+}
 while [ $# -gt 0 ]; do
   case "$1" in
-    --out) out="$2"; shift 2 ;;
+    --out) out="$(from_caller "$2")"; shift 2 ;;
+    --all) all=1; shift ;;
     --keep-archives) keep=1; shift ;;
     --dry-run) dry_run=1; shift ;;
-    --ddl-slam) ddl_slam="$2"; shift 2 ;;
-    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+    --ddl-slam) ddl_slam="$(from_caller "$2")"; shift 2 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "download-tum: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -41,6 +51,9 @@ sequences=(
   rgbd_dataset_freiburg3_walking_halfsphere
   rgbd_dataset_freiburg3_sitting_static
 )
+if [ "$all" = 1 ]; then
+  sequences+=(rgbd_dataset_freiburg3_sitting_halfsphere rgbd_dataset_freiburg2_desk_with_person)
+fi
 hosts=(https://cvg.cit.tum.de https://vision.in.tum.de)
 
 fetch() {  # fetch URL FILE
@@ -62,13 +75,15 @@ for name in "${sequences[@]}"; do
     continue
   fi
   archive="$out/$name.tgz"
+  freiburg="${name#rgbd_dataset_}"
+  freiburg="${freiburg%%_*}"  # freiburg1, freiburg2 or freiburg3
   if [ "$dry_run" = 1 ]; then
-    echo "$name: ${hosts[0]}/rgbd/dataset/freiburg3/$name.tgz -> $dir"
+    echo "$name: ${hosts[0]}/rgbd/dataset/$freiburg/$name.tgz -> $dir"
     continue
   fi
   ok=0
   for host in "${hosts[@]}"; do
-    url="$host/rgbd/dataset/freiburg3/$name.tgz"
+    url="$host/rgbd/dataset/$freiburg/$name.tgz"
     echo "$name: downloading $url"
     if fetch "$url" "$archive"; then
       ok=1
@@ -80,7 +95,12 @@ for name in "${sequences[@]}"; do
     echo "download-tum: could not download $name (no internet access?)" >&2
     exit 1
   fi
-  tar -xzf "$archive" -C "$out"
+  if ! tar -xzf "$archive" -C "$out"; then
+    # A download that saved an error page (or was cut) would be resumed onto, never replaced.
+    rm -f "$archive"
+    echo "download-tum: $archive is not a complete .tgz archive; removed it, run again" >&2
+    exit 1
+  fi
   if [ ! -f "$dir/rgb.txt" ] || [ ! -f "$dir/groundtruth.txt" ]; then
     echo "download-tum: $archive did not unpack into $dir with rgb.txt and groundtruth.txt" >&2
     exit 1
@@ -90,16 +110,16 @@ done
 
 cat <<MSG
 
-The paper's Table 1 sequences are in $out. Tables 1-3 (ATE, RPE translational and rotational,
-ORB-SLAM2 column = --no-dynamic, improvement in %):
+The sequences are in $out. Tables 1-3 (ATE, RPE translational and rotational, ORB-SLAM2 column =
+--no-dynamic, improvement in %; each folder's camera follows from its name, freiburg3 -> tum3):
 
-  $ddl_slam bench --suite $out --camera tum3 --out out/bench-tum
+  $ddl_slam bench --suite $out --out $repo/out/bench-tum
 
 or a selection:
 
-  $ddl_slam bench --camera tum3 --out out/bench-tum \\
+  $ddl_slam bench --out $repo/out/bench-tum \\
       --sequences $out/rgbd_dataset_freiburg3_walking_xyz $out/rgbd_dataset_freiburg3_sitting_static
 
-Results: out/bench-tum/tables.md and tables.json (docs/evaluation.md). The real sequences have no
+Results: $repo/out/bench-tum/tables.md and tables.json (docs/evaluation.md). The real sequences have no
 ground-truth masks, so the mask table stays empty.
 MSG

@@ -10,6 +10,7 @@
 #include "config_error_check.h"
 #include "ddl/core/error.h"
 #include "ddl/eval/evaluate.h"
+#include "ddl/eval/report.h"
 #include "ddl/io/trajectory_io.h"
 #include "eval_test_support.h"
 
@@ -133,11 +134,20 @@ TEST_F(BadInputTest, CoordinatesTooLargeToEvaluateAreAnError) {
   expect_contains(msg, "not finite");
 }
 
-TEST_F(BadInputTest, EstimateShorterThanDeltaFailsRpeClearly) {
+// As evaluate_ate.py and evaluate_rpe.py, which are two programs: an estimate too short for the
+// RPE delta still has its ATE, and the RPE says why it is missing (review, stop 24: both were
+// dropped, so a short run had no ATE in the tables).
+TEST_F(BadInputTest, EstimateShorterThanDeltaHasItsAteAndSaysWhyRpeIsMissing) {
   test::write_text(inputs_.estimate_path, good_trajectory(100.0, 20));  // 0.6 s < 1 s
-  const std::string msg = input_error_of(inputs_);
-  expect_contains(msg, inputs_.estimate_path);
-  expect_contains(msg, "RPE");
+  const EvalResult r = evaluate(inputs_, EvalOptions{});
+  EXPECT_EQ(r.ate.stats_m.count, 20u);
+  EXPECT_NEAR(r.ate.stats_m.rmse, 0.0, 1e-9);
+  expect_contains(r.rpe_error, inputs_.estimate_path);
+  expect_contains(r.rpe_error, "RPE");
+  const nlohmann::json j = to_json(r);
+  EXPECT_FALSE(j["rpe"]["available"].get<bool>());
+  EXPECT_FALSE(j["rpe"].contains("trans_rmse_m_per_s"));
+  expect_contains(format_report(r), "unavailable");
 }
 
 TEST_F(BadInputTest, MalformedFramesFileNamesFileAndLine) {

@@ -264,6 +264,19 @@ TEST(BenchInput, BadInputNamesTheFolder) {
   ASSERT_NE(first, std::string::npos) << log;
   EXPECT_EQ(log.find("nonsense_key", first + 1), std::string::npos) << log;
 
+  // Review finding (stop 24): a sequence whose camera cannot be told (no camera in its name, no
+  // camera.yaml) failed only when its turn came, after the runs before it, with exit 1.
+  const fs::path plain = root / "plain_sequence";
+  fs::create_directories(plain);
+  std::ofstream(plain / "rgb.txt") << "# empty\n";
+  std::ofstream(plain / "groundtruth.txt") << "# empty\n";
+  EXPECT_EQ(run_shell(Bench::command("--sequences '" + plain.string() + "' --out '" +
+                                     (root / "bad_camera").string() + "'"),
+                      root / "bad_camera.log", &log),
+            2);
+  EXPECT_NE(log.find(plain.string()), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(root / "bad_camera" / "plain_sequence"));
+
   // Review finding (stop 24): a folder the user names must exist; it was a warning, and the run
   // went on without what the folder was to give (the CNN, the photos of people).
   const std::string binary = std::string("'") + DDL_SLAM_BINARY + "' --log-level warn ";
@@ -320,6 +333,28 @@ TEST(SynthBackground, TheCompositeUsesTheBackgroundsCamera) {
   EXPECT_NE(camera.str().find("535.4"), std::string::npos) << camera.str();  // fr3's fx
   EXPECT_EQ(camera.str().find("517.3"), std::string::npos) << camera.str();  // fr1's fx
   fs::remove_all(root);
+}
+
+// Review finding (stop 24): a run's camera.yaml was the undistorted camera under fr1's name, so
+// `--camera camera.yaml` ran the sequence again without undistorting its images. It is the
+// calibration of the stored images, distortion included.
+TEST(RunOutputs, CameraYamlIsTheCalibrationOfTheStoredImages) {
+  const fs::path real = fs::path(shared_dir()) / "data/tum/rgbd_dataset_freiburg1_rpy";
+  if (!fs::exists(real / "associations.txt")) GTEST_SKIP() << "no fr1_rpy in " << shared_dir();
+  const fs::path out = fs::temp_directory_path() /
+                       ("ddl_run_camera_" + std::to_string(static_cast<long long>(getpid())));
+  std::string log;
+  ASSERT_EQ(run_shell(ddl_slam("run", quoted(real) + " --max-frames 2 --no-dynamic --no-octomap " +
+                                          "--no-inpainting --no-eval --out " + quoted(out)),
+                      out.string() + ".log", &log),
+            0)
+      << log;
+  std::ifstream file(out / "camera.yaml");
+  std::stringstream camera;
+  camera << file.rdbuf();
+  EXPECT_NE(camera.str().find("0.262383"), std::string::npos) << camera.str();  // fr1's k1
+  fs::remove_all(out);
+  fs::remove(out.string() + ".log");
 }
 
 // Review finding (stop 13): --first-frame beyond the last frame ran nothing, wrote empty

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <vector>
 
 #include "ddl/core/error.h"
 
@@ -48,17 +49,26 @@ EvalResult evaluate(const io::Trajectory& groundtruth, const io::Trajectory& est
   };
   try {
     r.ate = compute_ate(groundtruth, estimate, options.ate());
-    r.rpe = compute_rpe(groundtruth, estimate, options.rpe());
-    // Coordinates so large that the squared errors overflow (a diverged estimate written out,
-    // or a file in other units) give no number a table could show.
-    for (const double v : {r.ate.stats_m.rmse, r.rpe.trans_m.rmse, r.rpe.rot_deg.rmse}) {
-      if (!std::isfinite(v)) {
-        throw InputError(
-            "the errors are not finite: coordinates too large to evaluate (in metres?)");
-      }
-    }
   } catch (const InputError& e) {
     throw both(e);
+  }
+  // As the TUM scripts, which are two programs: an estimate too short for RPE's delta still has
+  // its ATE (evaluate_ate.py succeeds where evaluate_rpe.py fails).
+  try {
+    r.rpe = compute_rpe(groundtruth, estimate, options.rpe());
+  } catch (const InputError& e) {
+    r.rpe = RpeResult{};
+    r.rpe_error = both(e).what();
+  }
+  // Coordinates so large that the squared errors overflow (a diverged estimate written out, or a
+  // file in other units) give no number a table could show.
+  std::vector<double> errors = {r.ate.stats_m.rmse};
+  if (r.rpe_error.empty()) errors.insert(errors.end(), {r.rpe.trans_m.rmse, r.rpe.rot_deg.rmse});
+  for (const double v : errors) {
+    if (!std::isfinite(v)) {
+      throw both(
+          InputError("the errors are not finite: coordinates too large to evaluate (in metres?)"));
+    }
   }
   return r;
 }

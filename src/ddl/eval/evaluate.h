@@ -39,7 +39,8 @@ struct EvalResult {
   io::Trajectory groundtruth;
   io::Trajectory estimate;
   AteResult ate;
-  RpeResult rpe;
+  RpeResult rpe;          // empty when rpe_error is set
+  std::string rpe_error;  // why RPE could not be computed (too short for the delta); ATE still is
   std::optional<TrackedStats> tracked;  // set when inputs.frames_path is given
 };
 

@@ -588,10 +588,11 @@ std::vector<std::string> write_eval_plots(const EvalResult& result, const std::s
                                           Plane plane) {
   const std::filesystem::path d(dir);
   std::vector<std::string> written;
-  for (const auto& [figure, name] :
-       {std::pair{trajectory_top_view(result, plane), "trajectory_" + to_string(plane)},
-        std::pair{ate_over_time(result), std::string("ate_over_time")},
-        std::pair{rpe_over_time(result), std::string("rpe_over_time")}}) {
+  std::vector<std::pair<Figure, std::string>> figures = {
+      {trajectory_top_view(result, plane), "trajectory_" + to_string(plane)},
+      {ate_over_time(result), "ate_over_time"}};
+  if (result.rpe_error.empty()) figures.emplace_back(rpe_over_time(result), "rpe_over_time");
+  for (const auto& [figure, name] : figures) {
     const auto paths = write_figure(figure, (d / name).string());
     written.insert(written.end(), paths.begin(), paths.end());
   }

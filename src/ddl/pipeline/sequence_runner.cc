@@ -335,9 +335,15 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
             eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
         ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;
         summary["evaluation"] = ev;
-        spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
-                     result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
-                     result.rpe.rot_deg.rmse);
+        if (result.rpe_error.empty()) {
+          spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
+                       result.ate.stats_m.rmse, result.ate.errors_m.size(), result.rpe.trans_m.rmse,
+                       result.rpe.rot_deg.rmse);
+        } else {
+          spdlog::info("ATE RMSE {:.4f} m over {} poses", result.ate.stats_m.rmse,
+                       result.ate.errors_m.size());
+          spdlog::warn("RPE unavailable: {}", result.rpe_error);
+        }
       } catch (const Error& e) {
         spdlog::warn("evaluation skipped: {}", e.what());
         summary["evaluation_error"] = e.what();
