@@ -223,9 +223,13 @@ int run(const RunArgs& args) {
                  ? object[key].get<double>()
                  : NAN;
     };
-    std::printf("ATE RMSE %.4f m, RPE %.4f m/s %.3f deg/s, tracked ratio %.3f\n",
-                number(ev["ate"], "rmse_m"), number(ev["rpe"], "trans_rmse_m_per_s"),
-                number(ev["rpe"], "rot_rmse_deg_per_s"), number(ev, "tracked_ratio"));
+    const double rpe_t = number(ev["rpe"], "trans_rmse_m_per_s");
+    const std::string rpe = std::isfinite(rpe_t)
+                                ? fmt::format("RPE {:.4f} m/s {:.3f} deg/s", rpe_t,
+                                              number(ev["rpe"], "rot_rmse_deg_per_s"))
+                                : std::string("RPE unavailable (shorter than its delta)");
+    std::printf("ATE RMSE %.4f m, %s, tracked ratio %.3f\n", number(ev["ate"], "rmse_m"),
+                rpe.c_str(), number(ev, "tracked_ratio"));
   }
   if (outcome.summary.contains("masks")) {
     const auto& m = outcome.summary["masks"];

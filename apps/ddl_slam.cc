@@ -2,6 +2,7 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <string>
@@ -23,7 +24,10 @@ int main(int argc, char** argv) {
   // The log is diagnostics: it goes to stderr, beside the progress, so that stdout holds only what
   // a command reports (eval's report, bench's tables, run's summary line) for a script to read.
   spdlog::set_default_logger(spdlog::stderr_color_mt("ddl_slam"));
-  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  // On a terminal a log line first clears the progress bar's line (redrawn with \r), instead of
+  // being glued onto it; the bar is drawn again at its next update.
+  spdlog::set_pattern(isatty(STDERR_FILENO) != 0 ? "\r\033[K[%H:%M:%S.%e] [%^%l%$] %v"
+                                                 : "[%H:%M:%S.%e] [%^%l%$] %v");
 
   int exit_code = ddl::app::kOk;
   ddl::app::add_run_command(app, exit_code);

@@ -19,7 +19,8 @@
 #   --keep-archives   keep the .tgz files next to the folders
 #   --dry-run         print the URLs and the bench command, download nothing
 #   --ddl-slam PATH   the binary shown in the bench command (default build/release/apps/ddl_slam)
-# A sequence whose folder already holds rgb.txt and groundtruth.txt is not downloaded again.
+# A sequence whose folder already holds its lists and the last image each names is not downloaded
+# again (a folder left half unpacked is).
 set -euo pipefail
 caller_dir="$PWD"
 repo="$(cd "$(dirname "$0")/.." && pwd)"
@@ -39,7 +40,7 @@ while [ $# -gt 0 ]; do
     --keep-archives) keep=1; shift ;;
     --dry-run) dry_run=1; shift ;;
     --ddl-slam) ddl_slam="$(from_caller "$2")"; shift 2 ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
     *) echo "download-tum: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -67,10 +68,20 @@ fetch() {  # fetch URL FILE
   fi
 }
 
-mkdir -p "$out"
+complete() {  # complete DIR: its lists, and the last image each of them names
+  local dir="$1" list last
+  [ -f "$dir/groundtruth.txt" ] || return 1
+  for list in rgb.txt depth.txt; do
+    [ -f "$dir/$list" ] || return 1
+    last="$(grep -v '^#' "$dir/$list" | awk 'NF >= 2 { f = $2 } END { print f }')"
+    [ -n "$last" ] && [ -f "$dir/$last" ] || return 1
+  done
+}
+
+[ "$dry_run" = 1 ] || mkdir -p "$out"
 for name in "${sequences[@]}"; do
   dir="$out/$name"
-  if [ -f "$dir/rgb.txt" ] && [ -f "$dir/groundtruth.txt" ]; then
+  if complete "$dir"; then
     echo "$name: already in $dir"
     continue
   fi
@@ -101,24 +112,28 @@ for name in "${sequences[@]}"; do
     echo "download-tum: $archive is not a complete .tgz archive; removed it, run again" >&2
     exit 1
   fi
-  if [ ! -f "$dir/rgb.txt" ] || [ ! -f "$dir/groundtruth.txt" ]; then
-    echo "download-tum: $archive did not unpack into $dir with rgb.txt and groundtruth.txt" >&2
+  if ! complete "$dir"; then
+    echo "download-tum: $archive did not unpack into $dir with its lists and images" >&2
     exit 1
   fi
   [ "$keep" = 1 ] || rm -f "$archive"
 done
 
+# Shell-quoted, so that the commands below can be pasted even where a path holds a space.
+q_bin="$(printf '%q' "$ddl_slam")"
+q_out="$(printf '%q' "$out")"
+q_res="$(printf '%q' "$repo/out/bench-tum")"
 cat <<MSG
 
 The sequences are in $out. Tables 1-3 (ATE, RPE translational and rotational, ORB-SLAM2 column =
 --no-dynamic, improvement in %; each folder's camera follows from its name, freiburg3 -> tum3):
 
-  $ddl_slam bench --suite $out --out $repo/out/bench-tum
+  $q_bin bench --suite $q_out --out $q_res
 
 or a selection:
 
-  $ddl_slam bench --out $repo/out/bench-tum \\
-      --sequences $out/rgbd_dataset_freiburg3_walking_xyz $out/rgbd_dataset_freiburg3_sitting_static
+  $q_bin bench --out $q_res \\
+      --sequences $q_out/rgbd_dataset_freiburg3_walking_xyz $q_out/rgbd_dataset_freiburg3_sitting_static
 
 Results: $repo/out/bench-tum/tables.md and tables.json (docs/evaluation.md). The real sequences have no
 ground-truth masks, so the mask table stays empty.

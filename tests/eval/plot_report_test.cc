@@ -115,6 +115,16 @@ TEST(PlotTest, EvalPlotsAreWrittenAsPngAndSvg) {
     }
   }
   EXPECT_THROW(parse_plane("xw"), ConfigError);
+
+  // Without an RPE (an estimate shorter than the delta) no RPE plot is written, and the earlier
+  // estimate's one in the same folder is removed instead of passing for this one's.
+  EvalResult short_run = r;
+  short_run.rpe = RpeResult{};
+  short_run.rpe_error = "RPE: too short";
+  EXPECT_EQ(write_eval_plots(short_run, dir.file("plots"), Plane::kXY).size(), 4u);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("plots/rpe_over_time.png")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("plots/rpe_over_time.svg")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("plots/ate_over_time.png")));
 }
 
 TEST(ReportTest, JsonHasTheDocumentedKeysAndTheTableTheNumbers) {

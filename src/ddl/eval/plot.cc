@@ -591,7 +591,15 @@ std::vector<std::string> write_eval_plots(const EvalResult& result, const std::s
   std::vector<std::pair<Figure, std::string>> figures = {
       {trajectory_top_view(result, plane), "trajectory_" + to_string(plane)},
       {ate_over_time(result), "ate_over_time"}};
-  if (result.rpe_error.empty()) figures.emplace_back(rpe_over_time(result), "rpe_over_time");
+  if (result.rpe_error.empty()) {
+    figures.emplace_back(rpe_over_time(result), "rpe_over_time");
+  } else {
+    // An earlier estimate's RPE plot in the same folder would pass for this one's.
+    for (const char* stale : {"rpe_over_time.png", "rpe_over_time.svg"}) {
+      std::error_code ec;
+      if (std::filesystem::is_regular_file(d / stale, ec)) std::filesystem::remove(d / stale, ec);
+    }
+  }
   for (const auto& [figure, name] : figures) {
     const auto paths = write_figure(figure, (d / name).string());
     written.insert(written.end(), paths.begin(), paths.end());

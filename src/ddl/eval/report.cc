@@ -65,9 +65,11 @@ std::string format_report(const EvalResult& r) {
   s += fmt::format("\nRPE  (fixed delta {} {}, all pairs)\n", o.rpe_delta,
                    to_string(o.rpe_delta_unit));
   if (!r.rpe_error.empty()) s += fmt::format("  unavailable: {}\n", r.rpe_error);
-  s += fmt::format("  {:<22}{:>12}\n", "compared pose pairs", r.rpe.trans_m.count);
-  s += fmt::format("  {:<10}{:>24}{:>24}\n", "", fmt::format("translation [m/{}]", per),
-                   fmt::format("rotation [deg/{}]", per));
+  if (r.rpe_error.empty()) {
+    s += fmt::format("  {:<22}{:>12}\n", "compared pose pairs", r.rpe.trans_m.count);
+    s += fmt::format("  {:<10}{:>24}{:>24}\n", "", fmt::format("translation [m/{}]", per),
+                     fmt::format("rotation [deg/{}]", per));
+  }
   const auto rpe_row = [&](const char* name, double t, double rot) {
     s += fmt::format("  {:<10}{:>24.6f}{:>24.6f}\n", name, t, rot);
   };
@@ -114,32 +116,28 @@ json to_json(const EvalResult& r) {
   const ErrorStats& t = r.rpe.trans_m;
   const ErrorStats& q = r.rpe.rot_deg;
   const bool seconds = o.rpe_delta_unit == DeltaUnit::kSeconds;
-  if (!r.rpe_error.empty()) {
-    // No statistics at all (a table shows "-"), never zeros that look measured.
-    j["rpe"] = {{"available", false},
-                {"error", r.rpe_error},
-                {"delta", o.rpe_delta},
-                {"delta_unit", to_string(o.rpe_delta_unit)},
-                {"delta_s", seconds ? json(o.rpe_delta) : json(nullptr)}};
-  } else {
-    j["rpe"] = {{"available", true},
-                {"delta", o.rpe_delta},
-                {"delta_unit", to_string(o.rpe_delta_unit)},
-                {"delta_s", seconds ? json(o.rpe_delta) : json(nullptr)},
-                {"compared_pose_pairs", t.count},
-                {"trans_rmse_m_per_s", number(t.rmse)},
-                {"trans_mean_m_per_s", number(t.mean)},
-                {"trans_median_m_per_s", number(t.median)},
-                {"trans_std_m_per_s", number(t.std)},
-                {"trans_min_m_per_s", number(t.min)},
-                {"trans_max_m_per_s", number(t.max)},
-                {"rot_rmse_deg_per_s", number(q.rmse)},
-                {"rot_mean_deg_per_s", number(q.mean)},
-                {"rot_median_deg_per_s", number(q.median)},
-                {"rot_std_deg_per_s", number(q.std)},
-                {"rot_min_deg_per_s", number(q.min)},
-                {"rot_max_deg_per_s", number(q.max)}};
-  }
+  const bool rpe = r.rpe_error.empty();
+  // Unavailable (an estimate shorter than the delta): every statistic null, never a zero that
+  // looks measured; a table shows "-".
+  const auto stat = [&](double v) { return rpe ? number(v) : json(nullptr); };
+  j["rpe"] = {{"available", rpe},
+              {"error", rpe ? json(nullptr) : json(r.rpe_error)},
+              {"delta", o.rpe_delta},
+              {"delta_unit", to_string(o.rpe_delta_unit)},
+              {"delta_s", seconds ? json(o.rpe_delta) : json(nullptr)},
+              {"compared_pose_pairs", rpe ? json(t.count) : json(nullptr)},
+              {"trans_rmse_m_per_s", stat(t.rmse)},
+              {"trans_mean_m_per_s", stat(t.mean)},
+              {"trans_median_m_per_s", stat(t.median)},
+              {"trans_std_m_per_s", stat(t.std)},
+              {"trans_min_m_per_s", stat(t.min)},
+              {"trans_max_m_per_s", stat(t.max)},
+              {"rot_rmse_deg_per_s", stat(q.rmse)},
+              {"rot_mean_deg_per_s", stat(q.mean)},
+              {"rot_median_deg_per_s", stat(q.median)},
+              {"rot_std_deg_per_s", stat(q.std)},
+              {"rot_min_deg_per_s", stat(q.min)},
+              {"rot_max_deg_per_s", stat(q.max)}};
 
   if (r.tracked) {
     const TrackedStats& k = *r.tracked;
