@@ -40,6 +40,7 @@ struct BenchArgs {
 struct Sequence {
   std::string name;
   std::string dir;
+  bool from_suite = false;  // found in --suite (skipped when malformed) or named (an error)
 };
 
 /// The sequences to run, validated before anything runs. Named folders must exist and hold
@@ -84,7 +85,7 @@ std::vector<Sequence> collect_sequences(const BenchArgs& args, json& skipped) {
                            {"reason", "no groundtruth.txt in " + dir.string()}});
         continue;
       }
-      out.push_back({dir.filename().string(), dir.string()});
+      out.push_back({dir.filename().string(), dir.string(), true});
     }
     if (dirs.empty()) {
       throw InputError::at(args.suite,
@@ -129,17 +130,35 @@ std::optional<json> finished_summary(const fs::path& dir) {
 int bench(const BenchArgs& args) {
   const auto& stop = install_stop_handler();
   json skipped = json::array();
-  const std::vector<Sequence> sequences = collect_sequences(args, skipped);
+  std::vector<Sequence> sequences = collect_sequences(args, skipped);
   const fs::path out_dir(args.output_dir);
   create_folder(out_dir, "the benchmark's outputs");
 
   // The settings are the same for every sequence: a bad --config, --mode or --segmentation is
   // reported once, as bad input (exit 2), before any run.
   make_system_config(args.run);
-  // Every sequence's camera too (from --camera, its folder name or its camera.yaml): a folder
-  // whose camera cannot be told stops the bench before its first run, not halfway through.
-  const io::DatasetKind kind = io::parse_dataset_kind(args.run.dataset_kind, "--dataset-kind");
-  for (const Sequence& s : sequences) config::resolve_dataset_camera(s.dir, args.run.camera, kind);
+  // Every sequence is opened once too, as its runs will open it: its camera (from --camera, its
+  // folder name or its camera.yaml), its lists, the images they name and its ground truth. A
+  // malformed one stops the bench before its first run (exit code 2), not halfway through.
+  io::DatasetOptions dataset_options;
+  dataset_options.kind = io::parse_dataset_kind(args.run.dataset_kind, "--dataset-kind");
+  dataset_options.sequence.association =
+      io::parse_association_source(args.run.associations, "--associations");
+  std::vector<Sequence> valid;
+  for (const Sequence& s : sequences) {
+    try {
+      dataset_options.camera =
+          config::resolve_dataset_camera(s.dir, args.run.camera, dataset_options.kind);
+      io::open_dataset(s.dir, dataset_options);
+      valid.push_back(s);
+    } catch (const Error& e) {
+      if (!s.from_suite) throw;
+      spdlog::warn("bench: {} skipped: {}", s.dir, e.what());
+      skipped.push_back({{"sequence", s.name}, {"reason", e.what()}});
+    }
+  }
+  sequences = std::move(valid);
+  if (sequences.empty()) throw InputError("bench: no sequence of the suite can be opened");
   const auto vocabulary = load_vocabulary(resolve_vocabulary(args.run.vocabulary_path));
   const json settings = settings_json(args, sequences.size());
   std::vector<eval::BenchmarkRow> rows;

@@ -277,6 +277,20 @@ TEST(BenchInput, BadInputNamesTheFolder) {
   EXPECT_NE(log.find(plain.string()), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(root / "bad_camera" / "plain_sequence"));
 
+  // A named sequence with a malformed list stops the bench before its first run (exit 2, the
+  // file and line named); it used to fail when its turn came, listed as skipped, exit 1.
+  const fs::path broken = root / "rgbd_dataset_freiburg1_broken";
+  fs::create_directories(broken);
+  std::ofstream(broken / "rgb.txt") << "# list\n1305031102.175304 rgb/a.png extra\n";
+  std::ofstream(broken / "depth.txt") << "1305031102.160407 depth/a.png\n";
+  std::ofstream(broken / "groundtruth.txt") << "1305031102.1 0 0 0 0 0 0 1\n";
+  EXPECT_EQ(run_shell(Bench::command("--sequences '" + broken.string() + "' --out '" +
+                                     (root / "bad_list").string() + "'"),
+                      root / "bad_list.log", &log),
+            2);
+  EXPECT_NE(log.find("rgb.txt:2"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(root / "bad_list" / "rgbd_dataset_freiburg1_broken"));
+
   // Review finding (stop 24): a folder the user names must exist; it was a warning, and the run
   // went on without what the folder was to give (the CNN, the photos of people).
   const std::string binary = std::string("'") + DDL_SLAM_BINARY + "' --log-level warn ";
