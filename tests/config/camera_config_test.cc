@@ -221,13 +221,14 @@ TEST(CameraConfig, InvalidValuesNameFileAndKey) {
   for (const char* fx : {"fx: 1e300", "fx: 1e-9"}) {
     dir.write("fx.yaml", replaced(kValid, "fx: 500.0", fx));
     EXPECT_THAT(error_of<ConfigError>([&] { load_camera(dir.file("fx.yaml")); }),
-                HasSubstr("camera.fx': gives a horizontal field of view"))
+                HasSubstr(dir.file("fx.yaml") + ":5: configuration key 'camera.fx': gives a "
+                                                "horizontal field of view"))
         << fx;
   }
   dir.write("valid.yaml", kValid);
   dir.write("wild.yaml", replaced(kValid, "[0.1, -0.2, 0.001, 0.002, 0.05]", "[1e6, 0, 0, 0, 0]"));
   EXPECT_THAT(error_of<ConfigError>([&] { load_camera(dir.file("wild.yaml")); }),
-              HasSubstr(dir.file("wild.yaml") + ": configuration key 'camera.distortion'"));
+              HasSubstr(dir.file("wild.yaml") + ":9: configuration key 'camera.distortion'"));
   // fr1's real coefficients keep nearly all of the image.
   EXPECT_NO_THROW(load_camera("tum1"));
 }

@@ -38,8 +38,12 @@ camera::PinholeCamera parse_and_validate(const YamlFile& file, const std::string
   try {
     camera.validate();
   } catch (const ConfigError& e) {
-    // validate() names the key; add the file so the user knows which file to fix.
-    throw ConfigError(fmt::format("{}: {}", file.source(), e.what()));
+    // validate() names the key; add the file, and the key's line, so the user knows what to fix.
+    const std::string key = e.key();
+    const std::string prefix = std::string(kCameraSection) + ".";
+    const int line = key.rfind(prefix, 0) == 0 ? section.line_of(key.substr(prefix.size())) : 0;
+    throw ConfigError(line > 0 ? fmt::format("{}:{}: {}", file.source(), line, e.what())
+                               : fmt::format("{}: {}", file.source(), e.what()));
   }
   return camera;
 }
