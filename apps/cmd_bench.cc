@@ -49,11 +49,7 @@ struct Sequence {
 std::vector<Sequence> collect_sequences(const BenchArgs& args, json& skipped) {
   std::vector<Sequence> out;
   auto check = [](const fs::path& dir) {
-    if (!fs::is_directory(dir)) {
-      throw InputError::at(dir.string(), fs::exists(dir)
-                                             ? "is not a folder (a sequence is a folder)"
-                                             : "sequence folder not found");
-    }
+    io::require_sequence_folder(dir.string());
     if (!fs::exists(dir / "rgb.txt")) {
       throw InputError::at(dir.string(), "not a TUM-layout sequence (no rgb.txt)");
     }

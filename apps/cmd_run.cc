@@ -215,25 +215,21 @@ int run(const RunArgs& args) {
       s["frames_lost"].get<std::size_t>(), s["keyframes"].get<std::size_t>(),
       s["map_points"].get<std::size_t>(), s["loops_closed"].get<std::size_t>(),
       s["relocalizations"].get<std::size_t>());
+  // A statistic, or NaN where it is null (undefined, or an RPE that is unavailable).
+  const auto value = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
   if (outcome.summary.contains("evaluation")) {
     const auto& ev = outcome.summary["evaluation"];
     // The RPE may be unavailable (a run shorter than its delta): the ATE still is.
-    const auto number = [](const nlohmann::json& object, const char* key) {
-      return object.is_object() && object.contains(key) && object[key].is_number()
-                 ? object[key].get<double>()
-                 : NAN;
-    };
-    const double rpe_t = number(ev["rpe"], "trans_rmse_m_per_s");
+    const double rpe_t = value(ev["rpe"]["trans_rmse_m_per_s"]);
     const std::string rpe = std::isfinite(rpe_t)
                                 ? fmt::format("RPE {:.4f} m/s {:.3f} deg/s", rpe_t,
-                                              number(ev["rpe"], "rot_rmse_deg_per_s"))
+                                              value(ev["rpe"]["rot_rmse_deg_per_s"]))
                                 : std::string("RPE unavailable (shorter than its delta)");
-    std::printf("ATE RMSE %.4f m, %s, tracked ratio %.3f\n", number(ev["ate"], "rmse_m"),
-                rpe.c_str(), number(ev, "tracked_ratio"));
+    std::printf("ATE RMSE %.4f m, %s, tracked ratio %.3f\n", value(ev["ate"]["rmse_m"]),
+                rpe.c_str(), value(ev["tracked_ratio"]));
   }
   if (outcome.summary.contains("masks")) {
     const auto& m = outcome.summary["masks"];
-    auto value = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
     std::printf(
         "dynamic masks (IoU / precision / recall): cnn %.3f/%.3f/%.3f, geometry "
         "%.3f/%.3f/%.3f, combined %.3f/%.3f/%.3f\n",

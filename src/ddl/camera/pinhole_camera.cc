@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "ddl/core/error.h"
 
@@ -52,26 +54,24 @@ void PinholeCamera::validate() const {
   require(std::isfinite(fps) && fps > 0, "camera.fps", fps, "must be positive");
   if (has_distortion()) {
     // Coefficients no lens has send most of the undistorted image outside the sensor. Each
-    // undistorted pixel of a 64 x 48 grid is distorted as the undistortion maps do (OpenCV's
-    // model) and must land on the sensor for at least half of them.
-    const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2];
-    const double p2 = distortion[3], k3 = distortion[4];
-    int inside = 0;
+    // undistorted pixel of a 64 x 48 grid is distorted by OpenCV's model (the one the
+    // undistortion maps invert) and must land on the sensor for at least half of them.
     constexpr int kCols = 64, kRows = 48;
+    std::vector<cv::Point3d> rays;  // normalised undistorted coordinates at depth 1
     for (int r = 0; r < kRows; ++r) {
       for (int c = 0; c < kCols; ++c) {
-        const double x = ((c + 0.5) * width / kCols - cx) / fx;
-        const double y = ((r + 0.5) * height / kRows - cy) / fy;
-        const double r2 = x * x + y * y;
-        const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-        const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-        const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-        const double u = fx * xd + cx;
-        const double v = fy * yd + cy;
-        inside += u >= 0.0 && u < width && v >= 0.0 && v < height;
+        rays.emplace_back(((c + 0.5) * width / kCols - cx) / fx,
+                          ((r + 0.5) * height / kRows - cy) / fy, 1.0);
       }
     }
-    const double covered = inside / static_cast<double>(kCols * kRows);
+    std::vector<cv::Point2d> distorted;
+    cv::projectPoints(rays, cv::Vec3d(), cv::Vec3d(), cv::Mat(K()),
+                      cv::Mat(1, 5, CV_64F, const_cast<double*>(distortion.data())), distorted);
+    const auto inside =
+        std::count_if(distorted.begin(), distorted.end(), [&](const cv::Point2d& p) {
+          return p.x >= 0.0 && p.x < width && p.y >= 0.0 && p.y < height;
+        });
+    const double covered = static_cast<double>(inside) / static_cast<double>(kCols * kRows);
     if (covered < 0.5) {
       throw ConfigError::for_key(
           "camera.distortion",

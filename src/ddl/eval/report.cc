@@ -64,16 +64,15 @@ std::string format_report(const EvalResult& r) {
   const std::string per = per_delta_unit(o);
   s += fmt::format("\nRPE  (fixed delta {} {}, all pairs)\n", o.rpe_delta,
                    to_string(o.rpe_delta_unit));
-  if (!r.rpe_error.empty()) s += fmt::format("  unavailable: {}\n", r.rpe_error);
-  if (r.rpe_error.empty()) {
-    s += fmt::format("  {:<22}{:>12}\n", "compared pose pairs", r.rpe.trans_m.count);
-    s += fmt::format("  {:<10}{:>24}{:>24}\n", "", fmt::format("translation [m/{}]", per),
-                     fmt::format("rotation [deg/{}]", per));
-  }
   const auto rpe_row = [&](const char* name, double t, double rot) {
     s += fmt::format("  {:<10}{:>24.6f}{:>24.6f}\n", name, t, rot);
   };
-  if (r.rpe_error.empty()) {
+  if (!r.rpe_error.empty()) {
+    s += fmt::format("  unavailable: {}\n", r.rpe_error);
+  } else {
+    s += fmt::format("  {:<22}{:>12}\n", "compared pose pairs", r.rpe.trans_m.count);
+    s += fmt::format("  {:<10}{:>24}{:>24}\n", "", fmt::format("translation [m/{}]", per),
+                     fmt::format("rotation [deg/{}]", per));
     rpe_row("rmse", r.rpe.trans_m.rmse, r.rpe.rot_deg.rmse);
     rpe_row("mean", r.rpe.trans_m.mean, r.rpe.rot_deg.mean);
     rpe_row("median", r.rpe.trans_m.median, r.rpe.rot_deg.median);

@@ -44,10 +44,7 @@ DatasetKind detect_dataset_kind(const std::string& dir) {
 std::string default_camera_for(const std::string& dir, DatasetKind kind) {
   const std::string name = sequence_name(dir);
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) {
-    throw InputError::at(dir, fs::exists(dir, ec) ? "is not a folder (a sequence is a folder)"
-                                                  : "sequence folder not found");
-  }
+  require_sequence_folder(dir);
   if (kind == DatasetKind::kBonn || starts_with(name, "rgbd_bonn_")) return "bonn";
   if (starts_with(name, "rgbd_dataset_freiburg1_")) return "tum1";
   if (starts_with(name, "rgbd_dataset_freiburg2_")) return "tum2";

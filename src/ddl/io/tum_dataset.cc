@@ -98,16 +98,24 @@ bool jpeg_has_end_marker(const std::vector<unsigned char>& bytes) {
   return false;
 }
 
-cv::Mat read_image(const std::string& path, const char* what) {
+/// An image file a list names: there, and a regular file (a folder, or a FIFO or device whose
+/// read could block the run where Ctrl-C cannot stop it, is not). `context` ends the message
+/// (" (listed by rgb.txt)" when the sequence is opened, empty when a frame is read).
+void require_image_file(const std::string& path, const char* what, const std::string& context) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) throw InputError::at(path, fmt::format("{} image not found", what));
-  if (!fs::is_regular_file(status)) {
-    // A folder, or a FIFO or device, whose read could block the run where Ctrl-C cannot stop it.
-    throw InputError::at(path,
-                         fmt::format("{} image is not a regular file ({})", what,
-                                     fs::is_directory(status) ? "a folder" : "a special file"));
+  if (!fs::exists(status)) {
+    throw InputError::at(path, fmt::format("{} image not found{}", what, context));
   }
+  if (!fs::is_regular_file(status)) {
+    throw InputError::at(
+        path, fmt::format("{} image is not a regular file ({}){}", what,
+                          fs::is_directory(status) ? "a folder" : "a special file", context));
+  }
+}
+
+cv::Mat read_image(const std::string& path, const char* what) {
+  require_image_file(path, what, "");
   std::ifstream file(path, std::ios::binary | std::ios::ate);
   if (!file) {
     throw InputError::at(path, fmt::format("cannot open {} image: {}", what, std::strerror(errno)));
@@ -133,19 +141,6 @@ cv::Mat read_image(const std::string& path, const char* what) {
   return image;
 }
 
-/// A listed image, checked when the sequence is opened: there, and a regular file.
-void check_listed_image(const std::string& path, const char* what, const std::string& listed_by) {
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) {
-    throw InputError::at(path, fmt::format("{} image not found (listed by {})", what, listed_by));
-  }
-  if (!fs::is_regular_file(status)) {
-    throw InputError::at(
-        path, fmt::format("{} image is not a regular file (listed by {})", what, listed_by));
-  }
-}
-
 cv::Mat to_bgr8(const cv::Mat& image, const std::string& path) {
   if (image.depth() != CV_8U) {
     throw InputError::at(path, fmt::format("RGB image must be 8-bit (3-channel colour or "
@@ -169,6 +164,13 @@ cv::Mat to_bgr8(const cv::Mat& image, const std::string& path) {
 }
 
 }  // namespace
+
+void require_sequence_folder(const std::string& dir) {
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return;
+  throw InputError::at(dir, fs::exists(dir, ec) ? "is not a folder (a sequence is a folder)"
+                                                : "sequence folder not found");
+}
 
 AssociationSource parse_association_source(const std::string& text, const std::string& key) {
   if (text == "auto") return AssociationSource::kAuto;
@@ -232,8 +234,7 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
       undistorter_(camera) {
   options.validate();
   std::error_code ec;
-  if (!fs::exists(dir_, ec)) throw InputError::at(dir_, "sequence folder not found");
-  if (!fs::is_directory(dir_, ec)) throw InputError::at(dir_, "is not a folder");
+  require_sequence_folder(dir_);
 
   const std::string default_associations = (fs::path(dir_) / "associations.txt").string();
   switch (options.association) {
@@ -257,8 +258,9 @@ TumDataset::TumDataset(const std::string& dir, const camera::PinholeCamera& came
 
   if (options.check_files_on_open) {
     for (const FramePair& pair : pairs_) {
-      check_listed_image(pair.rgb_path, "RGB", association_description_);
-      check_listed_image(pair.depth_path, "depth", association_description_);
+      const std::string listed_by = " (listed by " + association_description_ + ")";
+      require_image_file(pair.rgb_path, "RGB", listed_by);
+      require_image_file(pair.depth_path, "depth", listed_by);
     }
   }
 

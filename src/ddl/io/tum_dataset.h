@@ -46,6 +46,10 @@ AssociationSource parse_association_source(const std::string& text,
                                            const std::string& key = "dataset.associations");
 std::string to_string(AssociationSource source);
 
+/// Throws ddl::InputError naming `dir` when it does not exist ("sequence folder not found") or is
+/// not a folder. Every reader and the bench check a sequence folder with it.
+void require_sequence_folder(const std::string& dir);
+
 /// The sequence name of a folder: its last path component ("rgbd_dataset_freiburg1_rpy" for
 /// ".../rgbd_dataset_freiburg1_rpy/"), resolving "." and "..".
 std::string sequence_name(const std::string& dir);

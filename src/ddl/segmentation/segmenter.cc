@@ -114,12 +114,19 @@ class OnnxSegmenter final : public Segmenter {
     check_input_size();
   }
 
+  /// The network's input: `bgr` resized to the input size, as RGB values 0-255 (the model
+  /// normalises internally; shared/README.md).
+  cv::Mat input_blob(const cv::Mat& bgr) const {
+    return cv::dnn::blobFromImage(bgr, 1.0, cv::Size(config_.input_width, config_.input_height),
+                                  cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
+  }
+
   /// One inference on a grey image of the configured input size, so that a size the model does
   /// not take (an ONNX export fixes it) is a configuration error before the first frame instead
   /// of an inference error in it.
   void check_input_size() {
-    const cv::Mat grey(config_.input_height, config_.input_width, CV_8UC3, cv::Scalar::all(128));
-    net_.setInput(cv::dnn::blobFromImage(grey, 1.0, grey.size(), cv::Scalar(), true, false));
+    net_.setInput(input_blob(
+        cv::Mat(config_.input_height, config_.input_width, CV_8UC3, cv::Scalar::all(128))));
     try {
       net_.forward();
     } catch (const cv::Exception& e) {
@@ -137,11 +144,7 @@ class OnnxSegmenter final : public Segmenter {
       throw Error("segmentation input must be a non-empty CV_8UC3 BGR image");
     }
     Stopwatch watch;
-    // The model normalises internally: it takes RGB values 0-255 (shared/README.md).
-    const cv::Mat blob =
-        cv::dnn::blobFromImage(bgr, 1.0, cv::Size(config_.input_width, config_.input_height),
-                               cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
-    net_.setInput(blob);
+    net_.setInput(input_blob(bgr));
     cv::Mat scores;
     try {
       scores = net_.forward();
