@@ -11,7 +11,10 @@
 
 #include <functional>
 #include <numeric>
+#include <optional>
 
+#include "ddl/loop/loop_verification.h"
+#include "ddl/mapping/keyframe_geometry.h"
 #include "ddl/mapping/local_mapper.h"
 #include "synthetic_world.h"
 
@@ -348,6 +351,50 @@ TEST(LoopCloser, LoopVerifiedAcrossAGlobalBaMergeIsClosedLater) {
   EXPECT_GT(before.max_center_m, 0.10);
   EXPECT_LT(after.max_center_m, 0.02);
   EXPECT_LT(after.max_rotation_deg, 0.5);
+}
+
+TEST(LoopCloser, TheKeyframeOfAVerifiedLoopStaysProtectedUntilTheCorrection) {
+  // Review, stop 25: once a loop was verified the closer released every protected keyframe but
+  // the matched one, so local mapping could cull the current keyframe while the correction was
+  // about to use it (threaded mode). The hook culls it at that point, as mapping would.
+  std::optional<bool> culled;
+  RingOptions options;
+  options.on_loop_verified = [&culled](map::Map& map) {
+    const std::vector<map::KeyFramePtr> keyframes = map.keyframes();
+    ASSERT_FALSE(keyframes.empty());
+    culled = keyframes.back()->set_bad();  // the newest: the keyframe the loop was found at
+  };
+  const RingRun run = run_ring(options);
+  ASSERT_TRUE(run.loop.has_value());
+  ASSERT_TRUE(culled.has_value());
+  EXPECT_FALSE(*culled) << "the current keyframe was culled during the loop correction";
+  const map::KeyFramePtr current = run.map->keyframe(run.loop->keyframe);
+  ASSERT_TRUE(current);
+  EXPECT_FALSE(current->is_bad());
+  EXPECT_LT(keyframe_errors(run, false).max_center_m, 0.02);
+}
+
+TEST(LoopCloser, ANeighbourDoesNotConfirmALoopWithItsOwnPoints) {
+  // Review, stop 25: the confirmation in the covisibles projected every loop point, so a
+  // neighbour that observes the loop points already matched its own features with them.
+  RingOptions options;
+  options.keyframes = 18;  // no loop: a plain map to take keyframes from
+  const RingRun run = run_ring(options);
+  const std::vector<map::KeyFramePtr> keyframes = run.map->keyframes();
+  ASSERT_GE(keyframes.size(), 4u);
+  const map::KeyFramePtr current = keyframes.back();
+  const map::KeyFramePtr neighbour = keyframes[keyframes.size() - 2];
+  LoopMatch loop;
+  loop.matched = keyframes.front();
+  loop.T_cur_w_corrected = current->T_c_w();  // the loop "moves" nothing
+  loop.loop_points = neighbour->map_point_set();
+  ASSERT_GT(loop.loop_points.size(), 50u);
+  const SyntheticWorld world;
+  const LoopCloserConfig config;
+  EXPECT_EQ(
+      confirm_loop_in(neighbour, current, loop, mapping::make_intrinsics(world.camera, config.bf),
+                      config.verification, config.optimizer),
+      0);
 }
 
 TEST(LoopCloser, DisabledDoesNothing) {

@@ -205,6 +205,29 @@ TEST(KeyFrameCulling, AKeyframeCulledOnReleaseTakesItsOrphanedPointsOutOfTheMap)
   EXPECT_EQ(s.map->keyframe(s.kfs[2]->id()), nullptr);
 }
 
+// Review finding (stop 25): in threaded mode a fusion can add an observation by a keyframe that
+// loop closing is culling on its own thread, after that keyframe erased its observations. Such
+// a stale observer must not make other keyframes redundant, and a culled keyframe takes no
+// children in the spanning tree.
+TEST(KeyFrameCulling, ACulledKeyframeLeftAsObserverDoesNotCount) {
+  CullingScene s = make_culling_scene(0);
+  cull_redundant_keyframes(s.kfs[4], *s.map, *s.database, 3.0, KeyFrameCullingConfig{});
+  ASSERT_TRUE(s.kfs[1]->is_bad());  // 1 and 2 are culled, 3 keeps 0 and 4 as other observers
+  ASSERT_TRUE(s.kfs[2]->is_bad());
+  ASSERT_FALSE(s.kfs[3]->is_bad());
+  ASSERT_FALSE(is_redundant_keyframe(*s.kfs[3], 3.0, KeyFrameCullingConfig{}));
+  for (std::size_t i = 0; i < 50; ++i) {
+    const map::MapPointPtr p = s.kfs[3]->map_point(i);
+    ASSERT_TRUE(p);
+    p->add_observation(s.kfs[1], i, true);  // what the race leaves behind
+    p->add_observation(s.kfs[2], i, true);
+  }
+  EXPECT_FALSE(is_redundant_keyframe(*s.kfs[3], 3.0, KeyFrameCullingConfig{}));
+  EXPECT_FALSE(s.kfs[1]->add_child(s.kfs[4]));
+  EXPECT_TRUE(s.kfs[1]->children().empty());
+  EXPECT_TRUE(s.kfs[3]->add_child(s.kfs[4]));
+}
+
 TEST(KeyFrameCulling, DisabledCullsNothing) {
   CullingScene s = make_culling_scene(0);
   KeyFrameCullingConfig config;

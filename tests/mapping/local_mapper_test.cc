@@ -216,6 +216,44 @@ TEST(LocalMapper, AKeyframeOfAMapResetMeanwhileIsNotPutBack) {
   EXPECT_GT(map->map_point_count(), 0u);
 }
 
+TEST(LocalMapper, AFeatureWhosePointWasFusedOrCulledInTheQueueIsUpdated) {
+  // Threaded mode: a keyframe waits in the queue while mapping fuses or culls points its
+  // features hold. Such a feature follows the point that replaced it or is freed; before (review,
+  // stop 25) it kept the bad point, and triangulation, which skips features holding a point,
+  // never used it again.
+  auto map = std::make_shared<map::Map>();
+  auto database = std::make_shared<vocabulary::BowDatabase>();
+  std::mt19937_64 rng(5);
+  const SyntheticWorld world = SyntheticWorld::trained_room(2000, rng);
+  test::FakeTracker tracker(map, world, /*track_window=*/10);
+  LocalMapper mapper(test_config(), world.camera, map, world.vocabulary, database);
+  const SE3 T0 = test::look_along(Vec3d::Zero(), 0.0);
+  const SE3 T1 = test::look_along(Vec3d(0.05, 0.0, 0.02), test::rad(1.0));
+  const map::KeyFramePtr kf0 = tracker.make_keyframe(world.observe(T0, rng), T0, 0);
+  ASSERT_EQ(mapper.process(kf0, nullptr), kf0);
+  const map::KeyFramePtr kf1 = tracker.make_keyframe(world.observe(T1, rng), T1, 1);
+  // Two features of kf1 that hold points tracked from kf0.
+  std::vector<std::size_t> tracked;
+  const std::vector<map::MapPointPtr> slots = kf1->map_points();
+  for (std::size_t i = 0; i < slots.size() && tracked.size() < 2; ++i) {
+    if (slots[i] && !slots[i]->is_in(kf1->id())) tracked.push_back(i);
+  }
+  ASSERT_EQ(tracked.size(), 2u);
+  const map::MapPointPtr culled = slots[tracked[0]];
+  const map::MapPointPtr fused = slots[tracked[1]];
+  culled->set_bad();
+  map->erase_map_point(culled->id());
+  const auto survivor =
+      std::make_shared<map::MapPoint>(map->next_map_point_id(), fused->position_w(), kf0);
+  ASSERT_TRUE(map->add_map_point(survivor));
+  fused->replace_with(survivor);
+  ASSERT_EQ(mapper.process(kf1, nullptr), kf1);
+  const std::vector<map::MapPointPtr> after = kf1->map_points();
+  EXPECT_EQ(after[tracked[0]], nullptr);
+  EXPECT_EQ(after[tracked[1]], survivor);
+  EXPECT_TRUE(survivor->is_in(kf1->id()));
+}
+
 TEST(LocalMapper, SameInputGivesIdenticalMap) {
   const MappingRun a = run_mapping(24, test_config(), true);
   const MappingRun b = run_mapping(24, test_config(), true);

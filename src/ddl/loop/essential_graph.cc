@@ -88,7 +88,7 @@ EssentialGraphStatistics optimize_essential_graph(map::Map& map, const Essential
   stats.initial_cost = result.initial_cost;
   stats.final_cost = result.final_cost;
 
-  map.apply_update([&] {
+  map.apply_frame_change([&] {
     for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k]->set_T_c_w(result.T_c_w[k]);
     // Points follow the keyframe that placed them: T_after^-1 * T_before.
     for (const map::MapPointPtr& point : map.map_points()) {

@@ -69,7 +69,7 @@ GlobalBaResult run_global_bundle_adjustment(const map::Map& map,
 
 std::size_t merge_global_bundle_adjustment(map::Map& map, const GlobalBaResult& result) {
   std::size_t updated = 0;
-  map.apply_update([&] {
+  map.apply_frame_change([&] {
     const std::vector<map::KeyFramePtr> keyframes = map.keyframes();
     std::map<map::KeyFrameId, SE3> new_pose;  // the pose each keyframe gets
     std::map<map::KeyFrameId, SE3> old_pose;  // its pose before the merge

@@ -53,11 +53,11 @@ class LoopCloser::Protection {
     keyframe->set_not_erase(true);
     keyframes_.push_back(keyframe);
   }
-  /// Releases every protected keyframe except `keep`, which stays protected.
-  void release_all_but(const map::KeyFramePtr& keep) {
+  /// Releases every protected keyframe except those in `keep`, which stay protected.
+  void release_all_but(const std::vector<map::KeyFramePtr>& keep) {
     std::vector<map::KeyFramePtr> kept;
     for (const map::KeyFramePtr& keyframe : keyframes_) {
-      if (keyframe == keep) {
+      if (std::find(keep.begin(), keep.end(), keyframe) != keep.end()) {
         kept.push_back(keyframe);
       } else {
         closer_.release(keyframe);
@@ -142,8 +142,15 @@ bool LoopCloser::confirmed_by_covisibles(const map::KeyFramePtr& keyframe,
 }
 
 void LoopCloser::release(const map::KeyFramePtr& keyframe) {
-  keyframe->set_not_erase(false);
-  // Culling that was deferred while the keyframe was protected happens now.
+  if (keyframe->erase_pending()) {
+    // Culling that was deferred while the keyframe was protected happens now, on this thread:
+    // with local mapping paused, so that it does not link a new keyframe to this one or fuse
+    // points into it while it is taken apart (review, stop 25).
+    PauseScope paused(pause_);
+    keyframe->set_not_erase(false);
+  } else {
+    keyframe->set_not_erase(false);
+  }
   if (keyframe->is_bad()) {
     map_->erase_culled_keyframe(keyframe);  // with the points it left without observers
     database_->erase(keyframe->id());
@@ -191,8 +198,9 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   }
   result.detection_ms = watch.elapsed_ms();
   if (!loop) return result;  // the protection scope releases every keyframe
-  // The keyframe and the loop keyframe stay protected; the other candidates are free again.
-  protection.release_all_but(loop->matched);
+  // The keyframe and the loop keyframe stay protected until the loop edges protect them; the
+  // other candidates are free again (and culling deferred on them happens now).
+  protection.release_all_but({keyframe, loop->matched});
   on_loop_verified(keyframe, *loop);
 
   // A global BA of an earlier loop is outdated now (ORB-SLAM2 aborts it too).
@@ -210,6 +218,12 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   watch.reset();
   {
     PauseScope paused(pause_);
+    if (keyframe->is_bad() || loop->matched->is_bad()) {
+      // Protected since detection, so only a map reset can have taken them.
+      spdlog::info("loop at keyframe {} with {} dropped: a keyframe left the map", keyframe->id(),
+                   loop->matched->id());
+      return result;
+    }
     result.correction =
         correct_loop(keyframe, *loop, *map_, camera_, config_.correction, config_.optimizer);
   }

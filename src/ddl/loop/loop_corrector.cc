@@ -40,7 +40,7 @@ LoopCorrectionStatistics correct_loop(const map::KeyFramePtr& current, const Loo
   fuse_params.check_reprojection = false;  // the corrected poses are not refined yet
   fuse_params.conflict = mapping::FuseConflict::kPreferProjected;
 
-  map.apply_update([&] {
+  map.apply_frame_change([&] {
     // 1. Points first (they use the poses before the correction), then the poses; the points'
     // normals and depth ranges last, from the corrected camera centres.
     std::vector<map::MapPointPtr> moved;

@@ -151,8 +151,15 @@ int confirm_loop_in(const map::KeyFramePtr& neighbour, const map::KeyFramePtr& c
   if (!neighbour || neighbour->is_bad()) return 0;
   const SE3 T_n_cur = neighbour->T_c_w() * current->T_c_w().inverse();
   const SE3 T_n_w = T_n_cur * loop.T_cur_w_corrected;
+  // Points the neighbour observes already would match its own features wherever the loop puts
+  // it near its present pose: evidence of nothing (review, stop 25).
+  std::vector<map::MapPointPtr> foreign_points;
+  foreign_points.reserve(loop.loop_points.size());
+  for (const map::MapPointPtr& point : loop.loop_points) {
+    if (!point->is_in(neighbour->id())) foreign_points.push_back(point);
+  }
   std::vector<map::MapPointPtr> matches(neighbour->features().size());
-  search_by_projection(*neighbour, T_n_w, loop.loop_points, matches, camera,
+  search_by_projection(*neighbour, T_n_w, foreign_points, matches, camera,
                        config.loop_search_radius, config.max_hamming);
   const int matched = count_matches(matches);
   if (matched < config.min_refined_inliers) return 0;

@@ -37,8 +37,9 @@ struct LoopMatch {
 /// Confirms a verified `loop` of `current` in `neighbour`, a covisible keyframe of `current`
 /// (ORB-SLAM3's verification in the covisibility graph, Campos et al., T-RO 2021, section VI-A):
 /// the loop points are projected into `neighbour` at the pose the loop implies for it (its
-/// pose relative to `current` kept), matched as in step 4, and the pose refined. Returns the
-/// inliers of the refinement (0 when it fails).
+/// pose relative to `current` kept), matched as in step 4, and the pose refined. Loop points the
+/// neighbour observes already are left out. Returns the inliers of the refinement (0 when it
+/// fails).
 int confirm_loop_in(const map::KeyFramePtr& neighbour, const map::KeyFramePtr& current,
                     const LoopMatch& loop, const mapping::CameraIntrinsics& camera,
                     const LoopVerificationConfig& config,

@@ -144,23 +144,37 @@ void KeyFrame::update_connections() {
     if (auto other = link.keyframe.lock()) other->add_connection(self, link.weight);
   }
 
-  bool set_parent_now = false;
+  bool needs_parent = false;
   {
     std::lock_guard lock(graph_mutex_);
     links_ = std::move(links);
     connected_ = std::move(connected);
     rebuild_ordered_locked();
-    if (first_connection_ && !origin_.load()) {
-      first_connection_ = false;
-      parent_ = strongest;
-      set_parent_now = true;
-    }
+    needs_parent = first_connection_ && !origin_.load();
   }
-  if (set_parent_now) strongest->add_child(self);
+  if (!needs_parent) return;
+  // The parent is the strongest covisible. One that loop closing is culling on its own thread
+  // meanwhile (its observations not yet all erased when they were counted above) refuses the
+  // child, and the next strongest is asked (review, stop 25: the child kept a bad parent).
+  std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> candidates;
+  candidates.emplace_back(strongest_weight, strongest);
+  for (const auto& [id, entry] : counts) {
+    if (entry.first != strongest) candidates.emplace_back(entry.second, entry.first);
+  }
+  std::stable_sort(candidates.begin() + 1, candidates.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [weight, candidate] : candidates) {
+    if (!candidate->add_child(self)) continue;
+    std::lock_guard lock(graph_mutex_);
+    parent_ = candidate;
+    first_connection_ = false;
+    return;
+  }
 }
 
 void KeyFrame::add_connection(const std::shared_ptr<KeyFrame>& other, int weight) {
   std::lock_guard lock(graph_mutex_);
+  if (erasing_ || bad_) return;  // being culled: its links are (being) taken apart
   links_[other->id()] = Link{other, weight};
   connected_[other->id()] = other;
   rebuild_ordered_locked();
@@ -256,9 +270,11 @@ std::vector<std::shared_ptr<KeyFrame>> KeyFrame::children() const {
   return out;
 }
 
-void KeyFrame::add_child(const std::shared_ptr<KeyFrame>& child) {
+bool KeyFrame::add_child(const std::shared_ptr<KeyFrame>& child) {
   std::lock_guard lock(graph_mutex_);
+  if (erasing_ || bad_) return false;
   children_[child->id()] = child;
+  return true;
 }
 
 void KeyFrame::erase_child(KeyFrameId child_id) {
@@ -300,6 +316,11 @@ bool KeyFrame::is_erase_protected() const {
   return not_erase_;
 }
 
+bool KeyFrame::erase_pending() const {
+  std::lock_guard lock(graph_mutex_);
+  return to_be_erased_ && !bad_ && !erasing_;
+}
+
 bool KeyFrame::is_bad() const {
   std::lock_guard lock(graph_mutex_);
   return bad_;
@@ -312,11 +333,12 @@ bool KeyFrame::set_bad() {
   std::shared_ptr<KeyFrame> parent;
   {
     std::lock_guard lock(graph_mutex_);
-    if (origin_.load() || bad_) return false;
+    if (origin_.load() || bad_ || erasing_) return false;
     if (not_erase_) {
       to_be_erased_ = true;
       return false;
     }
+    erasing_ = true;
     links.swap(links_);
     connected.swap(connected_);
     ordered_.clear();

@@ -82,7 +82,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::shared_ptr<KeyFrame> parent() const;
   void set_parent(const std::shared_ptr<KeyFrame>& parent);
   std::vector<std::shared_ptr<KeyFrame>> children() const;
-  void add_child(const std::shared_ptr<KeyFrame>& child);
+  /// false (nothing added) once set_bad() has begun: a keyframe being culled takes no children.
+  bool add_child(const std::shared_ptr<KeyFrame>& child);
   void erase_child(KeyFrameId child_id);
   void add_loop_edge(const std::shared_ptr<KeyFrame>& other);
   std::vector<std::shared_ptr<KeyFrame>> loop_edges() const;
@@ -96,6 +97,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   /// Loop closing protects keyframes it is working with from culling.
   void set_not_erase(bool protect);
   bool is_erase_protected() const;
+  /// Culling came while it was protected: set_not_erase(false) will cull it.
+  bool erase_pending() const;
   bool is_bad() const;
   /// Marks bad, detaches from points and covisibility, and re-parents its children in the
   /// spanning tree (ORB-SLAM2 SetBadFlag). The map's origin keyframe is never set bad.
@@ -140,6 +143,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   bool first_connection_ = true;
   bool not_erase_ = false;
   bool to_be_erased_ = false;
+  bool erasing_ = false;  // set_bad() has begun (bad_ is set when it is done)
   bool bad_ = false;
   std::atomic<bool> origin_{false};
 };

@@ -76,7 +76,12 @@ KeyFramePtr Map::first_keyframe() const {
 
 void Map::apply_update(const std::function<void()>& f) {
   std::unique_lock lock(update_mutex_);
-  update_count_.fetch_add(1);
+  f();
+}
+
+void Map::apply_frame_change(const std::function<void()>& f) {
+  std::unique_lock lock(update_mutex_);
+  frame_change_count_.fetch_add(1);
   f();
 }
 

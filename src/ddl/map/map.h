@@ -7,7 +7,8 @@
 // closing change them. Writers that move many entities at once (local BA write-back, loop
 // correction) run inside `apply_update(f)`, and readers that need a consistent view of several
 // entities run inside `read_consistent(f)`; both take the map's update lock around f, so a
-// reader never sees half a correction. The lock itself is never exposed.
+// reader never sees half a correction. The lock itself is never exposed. Writes that move the
+// world frame itself (loop correction, global BA merge) run inside `apply_frame_change(f)`.
 
 #include <atomic>
 #include <cstdint>
@@ -53,11 +54,17 @@ class Map {
   std::size_t map_point_count() const;
   KeyFramePtr first_keyframe() const;
 
-  /// Runs f under the exclusive update lock (writers moving many entities).
+  /// Runs f under the exclusive update lock (writers moving many entities within the world
+  /// frame: local BA).
   void apply_update(const std::function<void()>& f);
-  /// How many apply_update() calls have run (counted under the lock): a reader that compares
-  /// two readings taken under read_consistent() knows whether such a write came in between.
-  std::uint64_t update_count() const { return update_count_.load(); }
+  /// apply_update() for a write that moves the world frame as a whole around the current camera
+  /// (loop correction, essential graph, global BA merge): poses estimated before it are in the
+  /// old frame. Counted under the lock (frame_change_count).
+  void apply_frame_change(const std::function<void()>& f);
+  /// How many apply_frame_change() calls have run: a reader that compares two readings taken
+  /// under read_consistent() knows whether such a write came in between. Local BA does not count:
+  /// it refines points and poses where they are.
+  std::uint64_t frame_change_count() const { return frame_change_count_.load(); }
   /// Runs f under the shared update lock (readers needing a consistent multi-entity view).
   void read_consistent(const std::function<void()>& f) const;
 
@@ -76,7 +83,7 @@ class Map {
   std::atomic<KeyFrameId> next_keyframe_id_{0};
   std::atomic<MapPointId> next_map_point_id_{0};
   std::atomic<int> big_change_index_{0};
-  std::atomic<std::uint64_t> update_count_{0};
+  std::atomic<std::uint64_t> frame_change_count_{0};
   mutable std::mutex index_mutex_;
   std::map<KeyFrameId, KeyFramePtr> keyframes_;
   std::map<MapPointId, MapPointPtr> points_;

@@ -20,7 +20,7 @@ bool is_redundant_keyframe(const map::KeyFrame& keyframe, double close_depth_m,
     const int level = features.keypoints[i].octave;
     int observers = 0;
     for (const map::MapPoint::Observation& obs : point->observations()) {
-      if (obs.keyframe->id() == keyframe.id()) continue;
+      if (obs.keyframe->id() == keyframe.id() || obs.keyframe->is_bad()) continue;
       const int other_level = obs.keyframe->features().keypoints[obs.feature_index].octave;
       if (other_level <= level + 1 && ++observers >= needed) break;
     }

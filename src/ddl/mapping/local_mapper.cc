@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
@@ -65,9 +66,28 @@ bool LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
   // for this keyframe (already observing it) go on probation (ORB-SLAM2 ProcessNewKeyFrame).
   const map::FrameFeatures& features = keyframe->features();
   const std::vector<map::MapPointPtr> points = keyframe->map_points();
+  std::set<map::MapPointId> held;  // points the keyframe's features hold
+  for (const map::MapPointPtr& point : points) {
+    if (point && !point->is_bad()) held.insert(point->id());
+  }
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const map::MapPointPtr& point = points[i];
-    if (!point || point->is_bad()) continue;
+    map::MapPointPtr point = points[i];
+    if (point && point->is_bad()) {
+      // Fused or culled while the keyframe waited in the queue (threaded mode): the feature
+      // follows the point that replaced it, or is freed for triangulation, which skips features
+      // that hold a point (review, stop 25).
+      point = point->replaced_by();
+      for (int hop = 0; hop < 8 && point && point->is_bad(); ++hop) point = point->replaced_by();
+      if (point && (point->is_bad() || !held.insert(point->id()).second)) {
+        point = nullptr;  // gone too, or held by another feature already
+      }
+      if (point) {
+        keyframe->set_map_point(i, point);
+      } else {
+        keyframe->erase_map_point(i);
+      }
+    }
+    if (!point) continue;
     if (!point->is_in(keyframe->id())) {
       point->add_observation(keyframe, i, has_stereo(features, i));
       point->update_normal_and_depth();

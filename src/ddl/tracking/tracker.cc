@@ -97,7 +97,7 @@ std::optional<SE3> Tracker::low_cost_pose(Frame& frame) {
   if (state == TrackingState::kNotInitialized || state == TrackingState::kLost) return std::nullopt;
   const Stopwatch watch;
   map_->read_consistent([&] {
-    prepared_.map_updates = map_->update_count();
+    prepared_.frame_changes = map_->frame_change_count();
     prepared_.initial_pose_ok = estimate_initial_pose(frame, prepared_.method);
   });
   prepared_.initial_pose_done = true;
@@ -184,10 +184,13 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
 
   bool ok = false;
   const bool was_lost = state_.load() == TrackingState::kLost;
-  if (prepared_.initial_pose_done && map_->update_count() != prepared_.map_updates) {
+  if (prepared_.initial_pose_done && map_->frame_change_count() != prepared_.frame_changes) {
     // Loop closing moved the map since low_cost_pose() (threaded mode): that pose, and the last
     // frame it was predicted from, are in the old world frame. Estimate it again, as ORB-SLAM2
     // does under one map-update lock from the initial pose to the local map (found by review).
+    // A local BA in between does not count: it refines the map in place (review, stop 25: it
+    // made every frame after a keyframe's local BA estimate its initial pose twice).
+    ++low_cost_poses_redone_;
     frame.clear_map_points();
     frame.clear_rejected_points();  // rejected against the discarded pose
     prepared_.initial_pose_done = false;

@@ -96,6 +96,9 @@ class Tracker {
   /// Local map (keyframes, points) of the last tracked frame (tracking thread only).
   const LocalMap& local_map() const { return local_map_; }
   std::size_t frames_tracked() const { return trajectory_.tracked_frames(); }
+  /// Frames whose low-cost pose track() discarded and estimated again because loop closing
+  /// moved the world frame in between (threaded mode).
+  std::size_t low_cost_poses_redone() const { return low_cost_poses_redone_; }
 
  private:
   /// What steps 1-3 found out about the frame being prepared (valid for frame_id only).
@@ -107,7 +110,7 @@ class Tracker {
     bool initial_pose_ok = false;
     TrackingMethod method = TrackingMethod::kNone;
     double initial_pose_ms = 0.0;
-    std::uint64_t map_updates = 0;  // Map::update_count() when the initial pose was estimated
+    std::uint64_t frame_changes = 0;  // Map::frame_change_count() at the initial pose
   };
 
   void track_locked(Frame& frame, const MappingStatus& mapping, TrackingResult& result);
@@ -140,6 +143,7 @@ class Tracker {
   std::atomic<TrackingState> state_{TrackingState::kNotInitialized};
   FrameId next_frame_id_ = 0;
   PreparedFrame prepared_;
+  std::size_t low_cost_poses_redone_ = 0;
   Frame last_frame_;
   SE3 last_T_c_r_;  // last frame relative to its reference keyframe
   bool last_frame_tracked_ = false;
