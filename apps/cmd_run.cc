@@ -230,13 +230,18 @@ int run(const RunArgs& args) {
   }
   if (outcome.summary.contains("masks")) {
     const auto& m = outcome.summary["masks"];
-    std::printf(
-        "dynamic masks (IoU / precision / recall): cnn %.3f/%.3f/%.3f, geometry "
-        "%.3f/%.3f/%.3f, combined %.3f/%.3f/%.3f\n",
-        value(m["cnn"]["mean_iou"]), value(m["cnn"]["precision"]), value(m["cnn"]["recall"]),
-        value(m["geometry"]["mean_iou"]), value(m["geometry"]["precision"]),
-        value(m["geometry"]["recall"]), value(m["combined"]["mean_iou"]),
-        value(m["combined"]["precision"]), value(m["combined"]["recall"]));
+    // "-" where a score is undefined (no dynamic pixel in the truth, or none marked).
+    const auto scores = [&value](const nlohmann::json& kind) {
+      std::string out;
+      for (const char* key : {"mean_iou", "precision", "recall"}) {
+        const double v = value(kind[key]);
+        out += (out.empty() ? "" : "/") + (std::isfinite(v) ? fmt::format("{:.3f}", v) : "-");
+      }
+      return out;
+    };
+    std::printf("dynamic masks (IoU / precision / recall): cnn %s, geometry %s, combined %s\n",
+                scores(m["cnn"]).c_str(), scores(m["geometry"]).c_str(),
+                scores(m["combined"]).c_str());
   }
   std::printf("outputs in %s\n", args.output_dir.c_str());
   return outcome.interrupted ? kInterrupted : kOk;

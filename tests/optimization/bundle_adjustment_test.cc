@@ -231,10 +231,10 @@ TEST(LocalBundleAdjustment, AbortFlagRaisedBeforeTheCallChangesNothing) {
 }
 
 TEST(LocalBundleAdjustment, AbortedDuringTheRobustPhaseJudgesNoOutliers) {
-  // After a loop correction the first local BA is usually aborted early (keyframes queued while
-  // mapping was paused). One iteration from a far-off start (30 cm, 10 degrees) is no outlier test:
-  // the observations it would call outliers are good ones, and local mapping erases what it gets
-  // (review: half of a map's observations after one iteration).
+  // After a loop correction the first local BA is usually aborted early (tracking queues
+  // keyframes right after the pause, while mapping is busy). One iteration from a far-off start (30
+  // cm, 10 degrees) is no outlier test: the observations it would call outliers are good ones, and
+  // local mapping erases what it gets (review: half of a map's observations after one iteration).
   std::mt19937 rng(13);
   BaScene s = make_ba_scene(6, 150, {0}, 0.0, rng);
   for (std::size_t k = 1; k < s.problem.keyframes.size(); ++k) {

@@ -7,7 +7,7 @@
 // ones except current-loop keyframe), the spanning tree, earlier loop edges and strong
 // covisibility links (weight >= min_weight). Afterwards every map point moves with its reference
 // keyframe (or with the keyframe that corrected it).
-// Thread-safety: any thread; the write-back runs inside Map::apply_update.
+// Thread-safety: any thread; the write-back runs inside Map::apply_frame_change.
 
 #include <map>
 #include <set>

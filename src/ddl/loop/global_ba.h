@@ -4,7 +4,7 @@
 // thread while tracking and local mapping go on:
 //   - run_global_bundle_adjustment: snapshots every keyframe pose, point and observation (under
 //     Map::read_consistent) and solves; the first keyframe is the gauge. The map is not touched.
-//   - merge_global_bundle_adjustment: writes the result back (inside Map::apply_update).
+//   - merge_global_bundle_adjustment: writes the result back (inside Map::apply_frame_change).
 //     Keyframes created meanwhile are corrected through the spanning tree (each child keeps its
 //     pose relative to its parent), points created meanwhile move with their reference keyframe.
 // Thread-safety: run from any thread (a pure function of the snapshot); merge with local mapping

@@ -142,14 +142,13 @@ bool LoopCloser::confirmed_by_covisibles(const map::KeyFramePtr& keyframe,
 }
 
 void LoopCloser::release(const map::KeyFramePtr& keyframe) {
-  if (keyframe->erase_pending()) {
+  if (keyframe->release_erase_protection()) {
     // Culling that was deferred while the keyframe was protected happens now, on this thread:
     // with local mapping paused, so that it does not link a new keyframe to this one or fuse
-    // points into it while it is taken apart (review, stop 25).
+    // points into it while it is taken apart (review, stop 25). Should mapping cull it first,
+    // now that it is free, set_bad() does nothing here.
     PauseScope paused(pause_);
-    keyframe->set_not_erase(false);
-  } else {
-    keyframe->set_not_erase(false);
+    keyframe->set_bad();
   }
   if (keyframe->is_bad()) {
     map_->erase_culled_keyframe(keyframe);  // with the points it left without observers
@@ -219,7 +218,8 @@ LoopResult LoopCloser::process(const map::KeyFramePtr& keyframe) {
   {
     PauseScope paused(pause_);
     if (keyframe->is_bad() || loop->matched->is_bad()) {
-      // Protected since detection, so only a map reset can have taken them.
+      // Culling that began before they were protected (the keyframe is checked before
+      // protect(), the candidates come from detect()) can have taken them.
       spdlog::info("loop at keyframe {} with {} dropped: a keyframe left the map", keyframe->id(),
                    loop->matched->id());
       return result;

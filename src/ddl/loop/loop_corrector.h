@@ -9,7 +9,7 @@
 //      loop feed the essential graph, which is optimised (essential_graph.h);
 //   4. a loop edge joins the current and the loop keyframe; Map::notify_big_change().
 // The caller keeps local mapping still meanwhile (ORB-SLAM2 stops it); map changes of steps 1-2
-// and the pose graph write-back run inside Map::apply_update.
+// and the pose graph write-back run inside Map::apply_frame_change.
 // Thread-safety: any thread, one correction at a time.
 
 #include <cstddef>

@@ -163,12 +163,19 @@ void KeyFrame::update_connections() {
   }
   std::stable_sort(candidates.begin() + 1, candidates.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
+  // parent_ is written before add_child: once the candidate holds the child, its set_bad() may
+  // re-parent it at once, and that must not be overwritten here.
   for (const auto& [weight, candidate] : candidates) {
-    if (!candidate->add_child(self)) continue;
-    std::lock_guard lock(graph_mutex_);
-    parent_ = candidate;
-    first_connection_ = false;
-    return;
+    {
+      std::lock_guard lock(graph_mutex_);
+      if (!first_connection_) return;
+      parent_ = candidate;
+      first_connection_ = false;
+    }
+    if (candidate->add_child(self)) return;
+    std::lock_guard lock(graph_mutex_);  // refused: nobody else has seen this parent
+    parent_.reset();
+    first_connection_ = true;
   }
 }
 
@@ -316,8 +323,10 @@ bool KeyFrame::is_erase_protected() const {
   return not_erase_;
 }
 
-bool KeyFrame::erase_pending() const {
+bool KeyFrame::release_erase_protection() {
   std::lock_guard lock(graph_mutex_);
+  if (!loop_edges_.empty()) return false;  // loop edges protect it for good
+  not_erase_ = false;
   return to_be_erased_ && !bad_ && !erasing_;
 }
 

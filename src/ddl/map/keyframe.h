@@ -63,7 +63,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   // --- covisibility graph -------------------------------------------------------------------
   /// Recomputes links from the map points' observations (ORB-SLAM2 UpdateConnections: keep
   /// links of weight >= 15, or the strongest one). The first call also sets the spanning-tree
-  /// parent to the strongest link. Updates the other keyframes' links to this one.
+  /// parent to the strongest link (the next strongest when that one is being culled and refuses
+  /// the child). Updates the other keyframes' links to this one.
   void update_connections();
   void add_connection(const std::shared_ptr<KeyFrame>& other, int weight);
   void erase_connection(KeyFrameId other_id);
@@ -97,12 +98,15 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   /// Loop closing protects keyframes it is working with from culling.
   void set_not_erase(bool protect);
   bool is_erase_protected() const;
-  /// Culling came while it was protected: set_not_erase(false) will cull it.
-  bool erase_pending() const;
+  /// set_not_erase(false) without the deferred culling: returns whether culling came while it
+  /// was protected and is due now (the caller then calls set_bad()). A keyframe with loop edges
+  /// stays protected and returns false.
+  bool release_erase_protection();
   bool is_bad() const;
   /// Marks bad, detaches from points and covisibility, and re-parents its children in the
   /// spanning tree (ORB-SLAM2 SetBadFlag). The map's origin keyframe is never set bad.
-  /// Returns false when it did nothing (protected or origin).
+  /// Returns false when it did nothing (protected, origin, or bad or being culled already); a
+  /// protected keyframe is culled when its protection is released.
   bool set_bad();
   /// Pose relative to the parent, kept when the keyframe became bad so the camera trajectory
   /// can still be recovered through it.

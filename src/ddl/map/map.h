@@ -4,11 +4,11 @@
 // Ids come from per-map counters (no global state).
 //
 // Consistency across several calls: tracking reads poses and points while local mapping and loop
-// closing change them. Writers that move many entities at once (local BA write-back, loop
-// correction) run inside `apply_update(f)`, and readers that need a consistent view of several
-// entities run inside `read_consistent(f)`; both take the map's update lock around f, so a
-// reader never sees half a correction. The lock itself is never exposed. Writes that move the
-// world frame itself (loop correction, global BA merge) run inside `apply_frame_change(f)`.
+// closing change them. Writers that move many entities at once run inside `apply_update(f)`
+// (local BA write-back) or `apply_frame_change(f)` (loop correction, global BA merge: they move
+// the world frame), and readers that need a consistent view of several entities run inside
+// `read_consistent(f)`; all take the map's update lock around f, so a reader never sees half a
+// correction. The lock itself is never exposed.
 
 #include <atomic>
 #include <cstdint>

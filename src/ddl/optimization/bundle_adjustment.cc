@@ -222,10 +222,10 @@ BundleAdjustmentResult bundle_adjustment(const BundleAdjustmentProblem& problem,
   // Aborted during its robust phase, the solve judged nothing: chi2 at the input estimate, or
   // after a few of the robust iterations, is no outlier test. ORB-SLAM2 tests anyway; after a
   // loop correction, whose residuals only BA removes, the first local BA is usually aborted
-  // (keyframes queued during the pause) and its test then erased half of the map's
-  // observations (review, threaded composite: 16 642 of 31 598 after 1 iteration). A failed
-  // solve (either phase) gives no outliers either: its caller keeps the map as it was, the first
-  // phase's estimate included.
+  // (tracking queues keyframes right after the pause, while mapping is busy) and its test then
+  // erased half of the map's observations (review, threaded composite: 16 642 of 31 598 after 1
+  // iteration). A failed solve (either phase) gives no outliers either: its caller keeps the map as
+  // it was, the first phase's estimate included.
   const bool judged = robust_phase_completed && !result.failed;
   for (std::size_t i = 0; judged && i < num_obs; ++i) {
     if (is_outlier(i)) result.outliers.push_back(i);
