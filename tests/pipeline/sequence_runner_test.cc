@@ -199,6 +199,13 @@ TEST(SequenceRunner, AnEarlierRunsListedOutputsAreRemoved) {
   options.on_start = [&] { throw OutputError::at("config.yaml", "cannot write"); };
   EXPECT_THROW(run_sequence(dataset, system, options), OutputError);
   EXPECT_TRUE(fs::exists(out / "map.ot"));
+  // Ctrl-C before the first frame (while the models loaded): nothing ran, nothing is removed
+  // (review, stop 25).
+  options.on_start = [&] { ++starts; };
+  const std::atomic<bool> stopped{true};
+  EXPECT_THROW(run_sequence(dataset, system, options, &stopped), Interrupted);
+  EXPECT_TRUE(fs::exists(out / "map.ot"));
+  EXPECT_EQ(starts, 0);
   options.on_start = [&] {
     ++starts;
     EXPECT_TRUE(fs::exists(out / "map.ot")) << "called after the earlier outputs went";

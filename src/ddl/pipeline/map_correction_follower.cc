@@ -4,19 +4,24 @@
 
 namespace ddl::pipeline {
 
-void MapCorrectionFollower::anchor(const map::KeyFramePtr& reference) {
-  anchor_ = reference;
+bool MapCorrectionFollower::anchor(const map::KeyFramePtr& reference,
+                                   std::uint64_t frame_changes_at_tracking) {
+  bool anchored = false;
   map_->read_consistent([&] {
-    seen_big_change_ = map_->big_change_index();
+    if (map_->frame_change_count() != frame_changes_at_tracking) return;
+    anchor_ = reference;
+    seen_frame_changes_ = frame_changes_at_tracking;
     T_w_anchor_ = tracking::resolved_T_w_c(anchor_);
+    anchored = true;
   });
+  return anchored;
 }
 
 std::optional<SE3> MapCorrectionFollower::correction() {
-  if (!anchor_ || map_->big_change_index() == seen_big_change_) return std::nullopt;
+  if (!anchor_ || map_->frame_change_count() == seen_frame_changes_) return std::nullopt;
   SE3 T_w_anchor_now;
   map_->read_consistent([&] {
-    seen_big_change_ = map_->big_change_index();
+    seen_frame_changes_ = map_->frame_change_count();
     T_w_anchor_now = tracking::resolved_T_w_c(anchor_);
   });
   const SE3 T_new_old = T_w_anchor_now * T_w_anchor_.inverse();

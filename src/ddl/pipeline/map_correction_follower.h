@@ -7,14 +7,18 @@
 //
 // A loop correction moves the current keyframe's covisible neighbourhood rigidly with the
 // current keyframe (loop::LoopCorrector), and a global-BA merge moves every keyframe; both
-// then call Map::notify_big_change(). After such a change, correction() gives the motion of the
-// anchor keyframe, T_w_new_w_old, which maps a point kept in the old world frame to the new one.
+// write through Map::apply_frame_change(), which counts them under the map's update lock. After
+// such a change, correction() gives the motion of the anchor keyframe, T_w_new_w_old, which maps
+// a point kept in the old world frame to the new one. (Map::big_change_index, which the dense
+// map follows, is announced only after a whole correction: a frame tracked in between would be
+// anchored in the new frame to the old index, and half the motion lost; review, stop 25.)
 // Small local-BA refinements are not followed (they are not announced, and the data kept here
 // lives for about two seconds).
 //
 // Thread-safety: one instance per tracking thread; the keyframe poses are read under
 // Map::read_consistent.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -29,10 +33,12 @@ class MapCorrectionFollower {
   explicit MapCorrectionFollower(std::shared_ptr<const map::Map> map) : map_(std::move(map)) {}
 
   /// Anchors the data computed at a pose tracked against `reference` (non-null) to that
-  /// keyframe's pose now.
-  void anchor(const map::KeyFramePtr& reference);
+  /// keyframe's pose now, provided the world frame is still the one of the tracked pose:
+  /// Map::frame_change_count() equals `frame_changes_at_tracking`. Otherwise nothing changes and
+  /// false is returned (the caller then keeps no data at that pose).
+  bool anchor(const map::KeyFramePtr& reference, std::uint64_t frame_changes_at_tracking);
 
-  /// When the map announced a big change since the anchor was taken: the rigid motion of the
+  /// When the world frame changed since the anchor was taken: the rigid motion of the
   /// anchor keyframe, T_w_new_w_old (identity when it did not move), and the anchor is re-taken
   /// at the new pose. Otherwise, or without an anchor, nullopt.
   std::optional<SE3> correction();
@@ -43,8 +49,8 @@ class MapCorrectionFollower {
  private:
   std::shared_ptr<const map::Map> map_;
   map::KeyFramePtr anchor_;
-  SE3 T_w_anchor_;           // the anchor's pose when last read (tracking::resolved_T_w_c)
-  int seen_big_change_ = 0;  // Map::big_change_index when last read
+  SE3 T_w_anchor_;  // the anchor's pose when last read (tracking::resolved_T_w_c)
+  std::uint64_t seen_frame_changes_ = 0;  // Map::frame_change_count when last read
 };
 
 }  // namespace ddl::pipeline

@@ -136,6 +136,9 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   if (options.max_frames > 0 && options.max_frames < end - begin) end = begin + options.max_frames;
   const std::size_t total = end - begin;
 
+  // Ctrl-C while the models loaded: nothing ran, so the earlier run's outputs stay (review, stop
+  // 25: they were removed and an empty run written in their place).
+  if (stop != nullptr && stop->load()) throw Interrupted();
   // Every option is valid: from here on the run writes its outputs whatever happens.
   // The caller's own outputs first: if one cannot be written, the earlier run's outputs stay.
   if (options.on_start) options.on_start();
@@ -203,7 +206,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     dropped = prefetcher.frames_dropped();
     caller_cpu_s = (thread_cpu_ms() - caller_cpu_start_ms) / 1000.0;
     input_done_s = wall.elapsed_ms() / 1000.0;
-    system.finish();
+    // Interrupted: a running global BA is aborted, the map and trajectory so far are written.
+    system.finish(outcome.interrupted ? System::Finish::kInterrupted : System::Finish::kComplete);
   } catch (...) {
     error = std::current_exception();
     try {

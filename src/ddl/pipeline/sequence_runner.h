@@ -55,6 +55,8 @@ struct RunOutcome {
 /// `progress(done, total, note)` is called after every frame from the calling thread.
 using ProgressFn = std::function<void(std::size_t, std::size_t, const std::string&)>;
 
+/// Throws ddl::Interrupted, with nothing written or removed, when `stop` is already set before
+/// the first frame.
 RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const RunOptions& options,
                         const std::atomic<bool>* stop = nullptr, const ProgressFn& progress = {});
 

@@ -88,10 +88,15 @@ System::~System() {
   }
 }
 
-std::optional<SE3> System::constant_velocity_pose() const {
-  if (!last_T_c_w_) return std::nullopt;
-  if (!velocity_) return last_T_c_w_;
-  return *velocity_ * *last_T_c_w_;
+std::optional<SE3> System::previous_pose(std::uint64_t frame_changes) const {
+  if (!last_T_c_w_ || last_pose_frame_changes_ != frame_changes) return std::nullopt;
+  return last_T_c_w_;
+}
+
+std::optional<SE3> System::constant_velocity_pose(std::uint64_t frame_changes) const {
+  const std::optional<SE3> previous = previous_pose(frame_changes);
+  if (!previous || !velocity_) return previous;
+  return *velocity_ * *previous;
 }
 
 CnnMask System::segment(const io::RgbdFrame& frame) {
@@ -109,13 +114,15 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
   // Loop closing may move the keyframes between the low-cost pose and the reading of the
   // references' poses (threaded mode); the check then compares in two different world frames.
   const std::uint64_t stops_before = mapping_gate_.stop_sequence();
+  // The previous pose and the memory's points are in the world frame of this count.
+  const std::uint64_t frame_changes = map_->frame_change_count();
   const Stopwatch watch;
   std::optional<SE3> T_c_w = tracker_->low_cost_pose(current);
   timings_.record("low_cost_tracking", watch.elapsed_ms());
   if (T_c_w) {
     ++stats_.geometry_checks_low_cost;
   } else {
-    T_c_w = constant_velocity_pose();
+    T_c_w = constant_velocity_pose(frame_changes);
     if (!T_c_w) return {};
     ++stats_.geometry_checks_predicted;
   }
@@ -136,8 +143,8 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
       ++stats_.geometry_checks_skipped;
       references.clear();  // no geometry mask for this frame
     }
-    masks.geometry =
-        dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats, last_T_c_w_);
+    masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats,
+                                             previous_pose(frame_changes));
     const dynamics::GeometryCheckStats& g = masks.geometry_stats;
     if (g.implausible) ++stats_.geometry_checks_implausible;
     spdlog::debug(
@@ -157,7 +164,11 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
                     T_new_old->translation().norm());
       dynamic_->move_dynamic_surfaces(*T_new_old);
     }
-    masks.memory = dynamic_->memory_mask(frame, *T_c_w, &masks.memory_stats);
+    // A correction since the low-cost pose (threaded mode) moved the memory into a world frame
+    // the pose is not in: no recall this frame (review, stop 25).
+    if (map_->frame_change_count() == frame_changes) {
+      masks.memory = dynamic_->memory_mask(frame, *T_c_w, &masks.memory_stats);
+    }
     timings_.record("dynamic_memory", memory_watch.elapsed_ms());
   }
   cv::Mat exclusion = dynamic_->exclusion_mask(
@@ -211,6 +222,9 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   }
   ++frames_since_keyframe_;
   tracking::TrackingResult& result = outcome.tracking;
+  // The world frame the tracked pose is in, unless loop closing moves it meanwhile (then data
+  // kept at that pose is not anchored, and the pose is not used as the previous one).
+  const std::uint64_t frame_changes = map_->frame_change_count();
   result = tracker_->track(std::move(current), status);
   timings_.record("tracking", result.timings.total_ms);
   timings_.record("tracking.features", result.timings.features_ms);
@@ -222,15 +236,18 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (result.tracked()) {
     ++stats_.frames_tracked;
     const SE3 T_c_w = result.T_w_c->inverse();
-    velocity_ = last_T_c_w_ ? std::optional<SE3>(T_c_w * last_T_c_w_->inverse()) : std::nullopt;
+    const std::optional<SE3> previous = previous_pose(frame_changes);
+    velocity_ = previous ? std::optional<SE3>(T_c_w * previous->inverse()) : std::nullopt;
     last_T_c_w_ = T_c_w;
+    last_pose_frame_changes_ = frame_changes;
     last_reference_ = result.reference_keyframe;
     if (cnn && dynamic_->memory_enabled()) {
       if (const std::optional<SE3> T_new_old = memory_anchor_->correction()) {
         dynamic_->move_dynamic_surfaces(*T_new_old);
       }
-      dynamic_->remember_cnn_mask(frame, *result.T_w_c, {masks.cnn, 0.0, cnn->reused});
-      memory_anchor_->anchor(result.reference_keyframe);
+      if (memory_anchor_->anchor(result.reference_keyframe, frame_changes)) {
+        dynamic_->remember_cnn_mask(frame, *result.T_w_c, {masks.cnn, 0.0, cnn->reused});
+      }
     }
   } else {
     last_T_c_w_.reset();
@@ -373,7 +390,7 @@ void System::shutdown_workers(bool wait_for_global_ba) {
   }
 }
 
-void System::finish() {
+void System::finish(Finish how) {
   if (finished_) return;
   finished_ = true;
   // Every stage is shut down even when one fails (a background global BA that threw, an error of
@@ -386,7 +403,7 @@ void System::finish() {
       store_error(std::current_exception());
     }
   };
-  attempt([this] { shutdown_workers(/*wait_for_global_ba=*/true); });
+  attempt([this, how] { shutdown_workers(/*wait_for_global_ba=*/how == Finish::kComplete); });
   attempt([this] { dense_->finish(); });
   std::lock_guard lock(error_mutex_);
   if (worker_error_) std::rethrow_exception(worker_error_);

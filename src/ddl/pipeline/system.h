@@ -102,9 +102,11 @@ class System {
   /// then always given the masks (the network serves one thread at a time).
   CnnMask segment(const io::RgbdFrame& frame);
 
-  /// Ends the run: drains the queues, joins the workers, waits for a running global BA.
-  /// Rethrows a worker's exception. Idempotent.
-  void finish();
+  /// Ends the run: drains the queues, joins the workers, waits for a running global BA
+  /// (kInterrupted: aborts it instead, so that Ctrl-C does not wait for it). Rethrows a worker's
+  /// exception. Idempotent.
+  enum class Finish { kComplete, kInterrupted };
+  void finish(Finish how = Finish::kComplete);
 
   io::Trajectory camera_trajectory() const;
   io::Trajectory keyframe_trajectory() const;
@@ -135,7 +137,10 @@ class System {
   /// it returns (empty when neither ran).
   cv::Mat remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
                                  DynamicMasks& masks);
-  std::optional<SE3> constant_velocity_pose() const;
+  /// The last tracked pose, if it is in the world frame of `frame_changes`
+  /// (Map::frame_change_count): a loop correction or global-BA merge since leaves none.
+  std::optional<SE3> previous_pose(std::uint64_t frame_changes) const;
+  std::optional<SE3> constant_velocity_pose(std::uint64_t frame_changes) const;
   void rethrow_worker_error();
   void store_error(std::exception_ptr error);
   void shutdown_workers(bool wait_for_global_ba);
@@ -154,7 +159,8 @@ class System {
   // Fallback pose of the geometry check: constant-velocity prediction from the last two tracked
   // frames.
   std::optional<SE3> last_T_c_w_;
-  std::optional<SE3> velocity_;  // T_c(k) c(k-1)
+  std::optional<SE3> velocity_;                // T_c(k) c(k-1)
+  std::uint64_t last_pose_frame_changes_ = 0;  // Map::frame_change_count of last_T_c_w_
   map::KeyFramePtr last_reference_;
   // The dynamic memory's world-frame data follows loop corrections and global-BA merges.
   std::unique_ptr<MapCorrectionFollower> memory_anchor_;
