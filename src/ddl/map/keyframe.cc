@@ -153,15 +153,13 @@ void KeyFrame::update_connections() {
     needs_parent = first_connection_ && !origin_.load();
   }
   if (!needs_parent) return;
-  // The parent is the strongest covisible. One that loop closing is culling on its own thread
-  // meanwhile (its observations not yet all erased when they were counted above) refuses the
-  // child, and the next strongest is asked (review, stop 25: the child kept a bad parent).
-  std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> candidates;
-  candidates.emplace_back(strongest_weight, strongest);
-  for (const auto& [id, entry] : counts) {
-    if (entry.first != strongest) candidates.emplace_back(entry.second, entry.first);
-  }
-  std::stable_sort(candidates.begin() + 1, candidates.end(),
+  // The parent is the strongest covisible (the lowest id among equals, as `strongest` above).
+  // One that loop closing is culling on its own thread meanwhile (its observations not yet all
+  // erased when they were counted above) refuses the child, and the next strongest is asked
+  // (review, stop 25: the child kept a bad parent).
+  std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> candidates;  // id order
+  for (const auto& [id, entry] : counts) candidates.emplace_back(entry.second, entry.first);
+  std::stable_sort(candidates.begin(), candidates.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   // parent_ is written before add_child: once the candidate holds the child, its set_bad() may
   // re-parent it at once, and that must not be overwritten here.
