@@ -130,6 +130,17 @@ TEST(SystemConfig, TheThreeBfKeysMustAgree) {
       "tracking:\n  frame:\n    bf: 50\nmapping:\n  bf: 50\nloop:\n  bf: 50\n", "bf.yaml"));
 }
 
+// BoW matching compares direct-index node ids: keyframes whose bag of words mapping computed at
+// another depth than tracking's would share no node with any frame (review, stop 26).
+TEST(SystemConfig, TheTwoBowLevelsUpKeysMustAgree) {
+  const std::string msg = message_of(
+      [] { parse_system_config("tracking:\n  frame:\n    bow_levels_up: 4\n", "bow.yaml"); });
+  EXPECT_NE(msg.find("'mapping.bow_levels_up'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tracking.frame.bow_levels_up"), std::string::npos) << msg;
+  EXPECT_NO_THROW(parse_system_config(
+      "tracking:\n  frame:\n    bow_levels_up: 4\nmapping:\n  bow_levels_up: 4\n", "bow.yaml"));
+}
+
 TEST(SystemConfig, ReferenceListsEveryNestedKey) {
   const std::string md = system_config_reference_markdown();
   for (const char* key :

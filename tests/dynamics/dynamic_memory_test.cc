@@ -263,6 +263,36 @@ TEST(DynamicMemory, MoveWorldFollowsACorrectionOfTheMap) {
   EXPECT_GT(score_mask(recalled, a.person_mask).recall, 0.97);
 }
 
+// A remembered point just outside the image whose square reaches in marks the border pixels it
+// reaches. The colour test looked at a window around the point's own pixel, which was empty
+// outside the image, so every such point was rejected (review, stop 26).
+TEST(DynamicMemory, PointsJustOutsideTheImageMarkTheBorderTheyReach) {
+  const camera::PinholeCamera cam = synthetic::tum3_camera();
+  DynamicMemoryConfig config;
+  config.erode_px = 0;
+  DynamicMemory memory(config, cam);
+  const SE3 T_w_a = camera_at(0.0, 0.0);
+  const View a = render(cam, T_w_a, Person{});
+  // A small detection on the person: samples at u = 282 and 286 (stride 4, from 2).
+  const cv::Rect block(280, 240, 8, 8);
+  ASSERT_EQ(cv::countNonZero(a.person_mask(block)), 64);
+  cv::Mat detection = cv::Mat::zeros(a.person_mask.size(), CV_8UC1);
+  detection(block).setTo(255);
+  memory.remember(0, T_w_a, detection, a.depth_m, a.bgr);
+  // The camera moved right until the samples at u = 286 land at u = -1.5, outside the image; the
+  // person (2 m away) still fills the left border, and the samples' squares (2 px) reach it.
+  const SE3 T_w_b(Mat3d::Identity(), Vec3d(287.5 * Person{}.z / cam.fx, 0.0, 0.0));
+  const View b = render(cam, T_w_b, Person{});
+  ASSERT_EQ(b.person_mask.at<std::uint8_t>(244, 0), 255);
+  DynamicMemoryStats stats;
+  const cv::Mat recalled = memory.recall(1, T_w_b.inverse(), b.depth_m, b.bgr, &stats);
+  EXPECT_GT(stats.points_projected, 0);
+  EXPECT_EQ(stats.points_colour_rejected, 0);
+  EXPECT_GT(stats.pixels_marked, 0);
+  EXPECT_EQ(cv::countNonZero(recalled & ~b.person_mask), 0);
+  EXPECT_EQ(cv::countNonZero(recalled.colRange(3, recalled.cols)), 0);
+}
+
 TEST(DynamicMemory, ConfigErrorsNameTheKey) {
   DynamicMemoryConfig config;
   config.max_age_frames = 0;
@@ -272,6 +302,11 @@ TEST(DynamicMemory, ConfigErrorsNameTheKey) {
   config.max_depth_m = config.min_depth_m;
   EXPECT_THROW(config.validate(), ConfigError);
   EXPECT_NO_THROW(DynamicMemoryConfig{}.validate());
+  // 0 is "no depth": a minimum of 0 would remember holes as points at the camera centre.
+  config = {};
+  config.min_depth_m = 0.0;
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.memory.min_depth_m"));
 }
 
 }  // namespace

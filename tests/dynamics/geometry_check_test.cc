@@ -430,6 +430,11 @@ TEST(GeometryCheck, ConfigErrorsNameTheKey) {
   GeometryCheckConfig gate;
   gate.max_median_residual_ratio = 0;
   EXPECT_THROW(gate.validate(), ConfigError);
+  // 0 is "no depth": a minimum of 0 took holes for measurements (review, stop 26).
+  GeometryCheckConfig zero;
+  zero.min_depth_m = 0.0;
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { zero.validate(); },
+                                                        "dynamic.geometry.min_depth_m"));
 }
 
 }  // namespace

@@ -35,6 +35,19 @@ TEST(MaskDepthTrim, SpillOntoTheWallBehindIsCutAndThePersonKept) {
   EXPECT_EQ(cut.precision, 1.0);
 }
 
+// Non-zero is dynamic: a 0/1 mask is trimmed as its 0/255 copy (the core count divided by 255
+// made every rim pixel's reference depth 255 times too deep; review, stop 26).
+TEST(MaskDepthTrim, AZeroOneMaskIsTrimmedLikeItsZero255Copy) {
+  const Scene scene;
+  const cv::Mat spilled = feature_exclusion_mask(scene.person, 6);
+  const cv::Mat ones = spilled / 255;
+  ASSERT_EQ(cv::countNonZero(ones), cv::countNonZero(spilled));
+  const cv::Mat from_255 = trim_mask_by_depth(spilled, scene.depth_m, DepthTrimConfig{});
+  const cv::Mat from_ones = trim_mask_by_depth(ones, scene.depth_m, DepthTrimConfig{});
+  EXPECT_EQ(cv::countNonZero((from_ones != 0) != (from_255 != 0)), 0);
+  EXPECT_LT(cv::countNonZero(from_ones), cv::countNonZero(ones));  // the spill was cut
+}
+
 TEST(MaskDepthTrim, NearerPartsAndPixelsWithoutDepthAreKept) {
   Scene scene;
   const cv::Rect arm(200, 200, 60, 20);  // an arm reaching towards the camera

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 
 #include "config_error_check.h"
@@ -68,6 +69,10 @@ TEST(FeatureGrid, EmptyGridAndDegenerateQueries) {
   EXPECT_EQ(one.features_in_area(5, 5, 1.0f).size(), 1u);
   EXPECT_TRUE(one.features_in_area(5, 5, 1.0f, 1).empty());  // octave 0 below min_level 1
   EXPECT_EQ(one.cell_of(-100.0f, 1e6f), cv::Point(0, FeatureGrid::kDefaultRows - 1));
+  // A NaN coordinate goes to cell 0 (casting it to int is undefined; review, stop 26).
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(one.cell_of(nan, nan), cv::Point(0, 0));
+  EXPECT_EQ(one.cell_of(nan, 1e6f), cv::Point(0, FeatureGrid::kDefaultRows - 1));
 }
 
 TEST(FeatureGrid, BadArgumentsNameTheKey) {

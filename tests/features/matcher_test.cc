@@ -191,6 +191,16 @@ TEST(RotationHistogram, WrapsAroundAndIgnoresSmallPeaks) {
   EXPECT_EQ(histogram.top_bins()[0], -1);
 }
 
+// A bad bin count is a configuration error, also when negative (it was std::length_error from
+// sizing the counts first; review, stop 26).
+TEST(RotationHistogram, ABadBinCountNamesTheKey) {
+  for (const int bins : {0, -1}) {
+    EXPECT_TRUE(test_support::throws_config_error_for_key([&] { RotationHistogram h(bins); },
+                                                          "match.rotation_bins"))
+        << bins;
+  }
+}
+
 TEST(RotationHistogram, FilterByRotationUsesKeypointAngles) {
   std::vector<cv::KeyPoint> a(4);
   std::vector<cv::KeyPoint> b(4);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <numeric>
@@ -340,6 +341,32 @@ TEST(OrbExtractor, ConfigValidationNamesTheKey) {
   EXPECT_TRUE(test_support::throws_config_error_for_key(
       [&] { OrbExtractor extractor(small_patch); }, "orb.patch_size"))
       << "the radius-15 default pattern does not fit a 21-pixel patch";
+}
+
+// A level that is not more than 2 edge_threshold pixels wide or high holds no keypoint, yet took
+// its share of num_features (review, stop 26: scale 2 with 8 levels lost 59 of 1000 at 640x480).
+TEST(OrbExtractor, LevelsTooSmallForAKeypointAreAConfigurationError) {
+  OrbExtractorConfig config;  // 8 levels of 1.2: level 7 of 640x480 is 179x134
+  EXPECT_NO_THROW(config.validate_for_image(640, 480));
+  config.scale_factor = 2.0;  // level 4 is 40x30, level 3 80x60
+  try {
+    config.validate_for_image(640, 480);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("orb.num_levels"), std::string::npos) << what;
+    EXPECT_NE(what.find("level 4"), std::string::npos) << what;
+    EXPECT_NE(what.find("at most 4 levels"), std::string::npos) << what;
+  }
+  config.num_levels = 4;
+  EXPECT_NO_THROW(config.validate_for_image(640, 480));
+  // The check agrees with the extractor: the coarsest accepted level yields keypoints.
+  const OrbFeatures features = OrbExtractor(config).extract(make_textured_image({640, 480}, 1));
+  EXPECT_TRUE(std::any_of(features.keypoints.begin(), features.keypoints.end(),
+                          [](const cv::KeyPoint& kp) { return kp.octave == 3; }));
+  // An image too small for any keypoint names the edge.
+  EXPECT_TRUE(test_support::throws_config_error_for_key(
+      [&] { OrbExtractorConfig().validate_for_image(38, 480); }, "orb.edge_threshold"));
 }
 
 // The FAST cell threshold counts masked corners (a margin around dynamic objects, see the

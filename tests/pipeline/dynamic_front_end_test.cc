@@ -12,6 +12,8 @@
 #include <optional>
 
 #include "ddl/core/error.h"
+#include "ddl/map/keyframe.h"
+#include "ddl/map/map.h"
 #include "ddl/synthetic/sequence.h"
 #include "shared_data.h"
 
@@ -134,6 +136,50 @@ TEST_F(FolderBackend, AMissingFolderEndsTheRunInsteadOfFallingBack) {
   ASSERT_TRUE(config_.fallback_without_model);
   config_.segmentation.mask_folder = (dir_ / "typo").string();
   EXPECT_THROW(DynamicFrontEnd(config_, camera_, ""), InputError);
+}
+
+// The geometry check's references keep their depth images while they are alive: culled (or
+// gone) keyframes leave the cache first, then the oldest. Until stop 26 the oldest left first,
+// with a limit of 30, and a camera back where it had been 30 keyframes before tested nothing.
+TEST(DynamicFrontEndCache, CulledKeyframesLeaveFirstThenTheOldest) {
+  DynamicConfig config;
+  config.segmentation.backend = segmentation::Backend::kNone;
+  config.keyframe_depth_cache = 3;
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  DynamicFrontEnd front_end(config, camera, "");
+  map::Map map;
+  auto keyframe = [&] {
+    return std::make_shared<map::KeyFrame>(map.next_keyframe_id(), 0.0,
+                                           std::make_shared<map::FrameFeatures>(), SE3());
+  };
+  const cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+  const cv::Mat none = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+  cv::Mat person = none.clone();
+  person(cv::Rect(10, 10, 20, 20)).setTo(255);
+  auto has_depth = [&](const map::KeyFramePtr& kf) {
+    return !front_end.reference_views({kf}).front().depth_image_m.empty();
+  };
+  const map::KeyFramePtr oldest = keyframe();
+  front_end.remember_keyframe(oldest, depth, person);
+  map::KeyFramePtr gone = keyframe();
+  front_end.remember_keyframe(gone, depth, none);
+  const map::KeyFramePtr third = keyframe();
+  front_end.remember_keyframe(third, depth, none);
+  gone.reset();  // culled and freed
+  const map::KeyFramePtr fourth = keyframe();
+  front_end.remember_keyframe(fourth, depth, none);
+  EXPECT_TRUE(has_depth(oldest)) << "the oldest left before a culled keyframe";
+  EXPECT_TRUE(has_depth(third));
+  EXPECT_TRUE(has_depth(fourth));
+  // Only a mask that marks something is kept.
+  EXPECT_FALSE(front_end.reference_views({oldest}).front().dynamic_mask.empty());
+  EXPECT_TRUE(front_end.reference_views({third}).front().dynamic_mask.empty());
+  // With every cached keyframe alive, the oldest leaves.
+  const map::KeyFramePtr fifth = keyframe();
+  front_end.remember_keyframe(fifth, depth, none);
+  EXPECT_FALSE(has_depth(oldest));
+  EXPECT_TRUE(has_depth(third));
+  EXPECT_TRUE(has_depth(fifth));
 }
 
 TEST(DynamicFrontEndModel, AMissingModelFallsBackToGeometryOnly) {

@@ -369,5 +369,31 @@ TEST(TrackerTest, RefusesAVocabularyOfAnotherDescriptorPattern) {
       Tracker(testing::test_tracker_config(), testing::test_camera(), map, other, nullptr));
 }
 
+// An idf vocabulary trained on one image weighs every word 0, so every bag of words is empty and
+// relocalization and loop detection find nothing without a word said (review, stop 26).
+TEST(TrackerTest, RefusesAVocabularyWhoseWordsAllWeighZero) {
+  const vocabulary::Vocabulary& room = *testing::room_vocabulary();
+  std::vector<vocabulary::VocabularyNode> nodes = room.nodes();
+  for (vocabulary::VocabularyNode& node : nodes) node.weight = 0.0f;
+  auto unweighted = std::make_shared<vocabulary::Vocabulary>(
+      vocabulary::Vocabulary::from_nodes(room.branching(), room.levels(), room.weighting(), nodes));
+  unweighted->set_descriptor_tag(room.descriptor_tag());
+  auto map = std::make_shared<map::Map>();
+  try {
+    Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map, unweighted,
+                    nullptr);
+    FAIL() << "expected ddl::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("weighs 0"), std::string::npos) << e.what();
+  }
+  // One word with a weight is enough.
+  nodes[room.node_of_word(0)].weight = 1.0f;
+  auto one = std::make_shared<vocabulary::Vocabulary>(
+      vocabulary::Vocabulary::from_nodes(room.branching(), room.levels(), room.weighting(), nodes));
+  one->set_descriptor_tag(room.descriptor_tag());
+  EXPECT_NO_THROW(
+      Tracker(testing::test_tracker_config(), testing::test_camera(), map, one, nullptr));
+}
+
 }  // namespace
 }  // namespace ddl::tracking

@@ -34,6 +34,33 @@ TEST(VocabularyTraining, NoDescriptorsAtAllIsAnInputError) {
   EXPECT_THROW(train_vocabulary(none, VocabularyConfig{}), InputError);
 }
 
+// With one image every word's idf is log(1 / 1) = 0: every bag of words would be empty, and
+// relocalization and loop detection would find nothing (review, stop 26). tf and binary weighting
+// need no second image.
+TEST(VocabularyTraining, IdfWeightingNeedsTwoImagesWithFeatures) {
+  std::mt19937_64 rng(3);
+  const cv::Mat one = descriptors_to_mat(random_descriptors(40, rng));
+  const cv::Mat blank(0, 32, CV_8UC1);
+  for (const Weighting weighting : {Weighting::kTfIdf, Weighting::kIdf}) {
+    VocabularyConfig config = small_config(3, 2);
+    config.weighting = weighting;
+    try {
+      train_vocabulary({one, blank}, config);
+      FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("at least 2"), std::string::npos) << e.what();
+    }
+    const Vocabulary two = train_vocabulary({one, one}, config);
+    EXPECT_FALSE(two.empty());
+  }
+  for (const Weighting weighting : {Weighting::kTf, Weighting::kBinary}) {
+    VocabularyConfig config = small_config(3, 2);
+    config.weighting = weighting;
+    const Vocabulary voc = train_vocabulary({one}, config);
+    EXPECT_GT(voc.word_weight(0), 0.0);
+  }
+}
+
 // Four well separated prototypes (random 256-bit strings are ~128 bits apart), 60 observations
 // each with 12 of 256 bits flipped. One level of 4-means must recover the four groups, and the
 // majority vote must give back every prototype bit for bit (a bit is wrong only if > 30 of 60
@@ -82,7 +109,9 @@ TEST(VocabularyTraining, HierarchyFollowsNestedClusters) {
       for (const Descriptor& p : group) all.push_back(flip_bits(p, 6, rng));
     }
   }
-  const Vocabulary voc = train_vocabulary({descriptors_to_mat(all)}, small_config(3, 2));
+  VocabularyConfig config = small_config(3, 2);
+  config.weighting = Weighting::kTf;  // one image: idf would weigh every word 0
+  const Vocabulary voc = train_vocabulary({descriptors_to_mat(all)}, config);
   EXPECT_EQ(voc.word_count(), 9u);
   std::set<WordId> words;
   std::set<NodeId> groups;
@@ -312,7 +341,9 @@ TEST(VocabularyTraining, StopFlagInterrupts) {
 
 TEST(VocabularyTraining, IdenticalDescriptorsGiveASingleWord) {
   std::vector<Descriptor> same(50, Descriptor{1, 2, 3, 4});
-  const Vocabulary voc = train_vocabulary({descriptors_to_mat(same)}, small_config(4, 3));
+  VocabularyConfig config = small_config(4, 3);
+  config.weighting = Weighting::kBinary;  // one image: idf would weigh every word 0
+  const Vocabulary voc = train_vocabulary({descriptors_to_mat(same)}, config);
   EXPECT_EQ(voc.word_count(), 1u);
   EXPECT_EQ(voc.node_count(), 2u);
 }

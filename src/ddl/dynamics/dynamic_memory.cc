@@ -17,8 +17,9 @@ void DynamicMemoryConfig::validate() const {
   if (sample_stride_px < 1 || sample_stride_px > 32) fail("sample_stride_px", "must be in 1..32");
   if (!(depth_tolerance_m > 0)) fail("depth_tolerance_m", "must be > 0");
   if (!(depth_tolerance_quadratic >= 0)) fail("depth_tolerance_quadratic", "must be >= 0");
-  if (!(min_depth_m >= 0 && max_depth_m > min_depth_m))
-    fail("max_depth_m", "must exceed min_depth_m");
+  // 0 is "no depth" in a depth image: a minimum of 0 would take holes for measurements.
+  if (!(min_depth_m > 0)) fail("min_depth_m", "must be > 0");
+  if (!(max_depth_m > min_depth_m)) fail("max_depth_m", "must exceed min_depth_m");
   if (erode_px < 0 || erode_px > 32) fail("erode_px", "must be in 0..32");
   if (max_splat_radius_px < 0 || max_splat_radius_px > 32)
     fail("max_splat_radius_px", "must be in 0..32");
@@ -128,6 +129,10 @@ void DynamicMemory::remember(std::size_t frame_index, const SE3& T_w_c, const cv
 bool DynamicMemory::colour_still_there(const Point& point, int u0, int v0,
                                        const cv::Mat& bgr) const {
   if (config_.colour_tolerance < 0 || bgr.empty() || !point.has_colour) return true;
+  // A point just outside the image (its square reaches in) is compared at the nearest pixels
+  // inside: the window was empty and such points were all rejected (review, stop 26).
+  u0 = std::clamp(u0, 0, bgr.cols - 1);
+  v0 = std::clamp(v0, 0, bgr.rows - 1);
   for (int v = std::max(0, v0 - 1); v <= std::min(bgr.rows - 1, v0 + 1); ++v) {
     const auto* row = bgr.ptr<cv::Vec3b>(v);
     for (int u = std::max(0, u0 - 1); u <= std::min(bgr.cols - 1, u0 + 1); ++u) {

@@ -53,7 +53,8 @@ struct DynamicMemoryConfig {
   /// 0 = recall everywhere.
   int recall_band_px = 64;
   /// Whether tracking drops the features in the recalled mask too (like the geometry mask's).
-  /// Otherwise the recalled mask only joins the combined mask (mapping, inpainting, outputs).
+  /// Otherwise their features are tracked and may become map points like any other; the recalled
+  /// mask only joins the combined mask (dense mapping, inpainting, outputs).
   bool drop_features = false;
   /// Static veto: a point to remember is dropped when one of the last static_views keyframes
   /// saw it as part of a static surface: outside its dynamic mask, at a depth that agrees. That

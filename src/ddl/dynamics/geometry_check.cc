@@ -19,8 +19,10 @@ void GeometryCheckConfig::validate() const {
     fail("max_parallax_deg", "must be in (0, 180]");
   if (!(depth_threshold_m > 0)) fail("depth_threshold_m", "must be > 0");
   if (!(depth_threshold_quadratic >= 0)) fail("depth_threshold_quadratic", "must be >= 0");
-  if (!(min_depth_m >= 0 && max_depth_m > min_depth_m))
-    fail("max_depth_m", "must exceed min_depth_m");
+  // 0 is "no depth" in a depth image: a minimum of 0 would take holes for measurements (review,
+  // stop 26: they entered the median residual and the seeds).
+  if (!(min_depth_m > 0)) fail("min_depth_m", "must be > 0");
+  if (!(max_depth_m > min_depth_m)) fail("max_depth_m", "must exceed min_depth_m");
   if (max_points_per_keyframe < 1) fail("max_points_per_keyframe", "must be >= 1");
   if (window_radius_px < 0 || window_radius_px > 10) fail("window_radius_px", "must be in 0..10");
   if (!(motion_window_gain >= 0 && motion_window_gain <= 4))
@@ -234,14 +236,16 @@ cv::Mat geometry_dynamic_mask(const cv::Mat& depth_m, const SE3& T_c_w,
   for (const Reference& ref : dense) {
     const ReferenceView& view = *ref.view;
     const std::size_t n = view.pixels.size();
-    const std::size_t step =
-        std::max<std::size_t>(1, n / static_cast<std::size_t>(config.max_points_per_keyframe));
+    // At most max_points_per_keyframe, evenly spread (a stride of n / max rounded down tested up
+    // to twice as many; review, stop 26).
+    const std::size_t count = std::min(n, static_cast<std::size_t>(config.max_points_per_keyframe));
     const SE3 T_cur_ref = T_c_w * view.T_w_c;
     // A plain SE3 and a flag (GCC 12 warns, wrongly, about an optional's maybe-uninitialised
     // value inside the loop).
     const bool have_previous = T_c_w_previous.has_value();
     const SE3 T_prev_ref = have_previous ? *T_c_w_previous * view.T_w_c : SE3();
-    for (std::size_t i = 0; i < n; i += step) {
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t i = k * n / count;
       const double z_ref = view.depth_m[i];
       if (z_ref < config.min_depth_m || z_ref > config.max_depth_m) continue;
       const Vec3d p_ref = camera.unproject(view.pixels[i].x, view.pixels[i].y, z_ref);

@@ -26,7 +26,8 @@ cv::Mat trim_mask_by_depth(const cv::Mat& mask, const cv::Mat& depth_m,
   const int k = 2 * config.rim_px + 1;
   cv::erode(mask, core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
   // Mean depth of the core pixels with depth around every pixel (box sums of depth and count).
-  cv::Mat core_valid = core & (depth_m > 0.0f);
+  // (core != 0): the mask may be 0/1 as well as 0/255 (non-zero = dynamic).
+  cv::Mat core_valid = (core != 0) & (depth_m > 0.0f);
   cv::Mat core_depth = cv::Mat::zeros(depth_m.size(), CV_32FC1);
   depth_m.copyTo(core_depth, core_valid);
   cv::Mat count;

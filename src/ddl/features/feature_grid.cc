@@ -47,13 +47,14 @@ FeatureGrid::FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, const cv::R
 }
 
 cv::Point FeatureGrid::cell_of(float x, float y) const {
-  // floor of a monotonic expression, then clamped (also for NaN-free values far outside).
+  // floor of a monotonic expression, then clamped (also for values far outside). A NaN goes to
+  // cell 0: `!(f >= 0)` holds for it, where a cast to int would be undefined (review, stop 26).
   const float fx = std::floor((x - bounds_.x) * inv_cell_w_);
   const float fy = std::floor((y - bounds_.y) * inv_cell_h_);
   const int cx =
-      fx < 0.0f ? 0 : (fx >= static_cast<float>(cols_ - 1) ? cols_ - 1 : static_cast<int>(fx));
+      !(fx >= 0.0f) ? 0 : (fx >= static_cast<float>(cols_ - 1) ? cols_ - 1 : static_cast<int>(fx));
   const int cy =
-      fy < 0.0f ? 0 : (fy >= static_cast<float>(rows_ - 1) ? rows_ - 1 : static_cast<int>(fy));
+      !(fy >= 0.0f) ? 0 : (fy >= static_cast<float>(rows_ - 1) ? rows_ - 1 : static_cast<int>(fy));
   return {cx, cy};
 }
 

@@ -120,11 +120,13 @@ std::vector<cv::DMatch> match_brute_force(const cv::Mat& query, const cv::Mat& t
   return matches;
 }
 
-RotationHistogram::RotationHistogram(int num_bins) : num_bins_(num_bins), counts_(num_bins, 0) {
+RotationHistogram::RotationHistogram(int num_bins) : num_bins_(num_bins) {
+  // Checked before sizing: a negative count would be a huge size_t (std::length_error).
   if (num_bins < 1) {
     throw ConfigError::for_key("match.rotation_bins",
                                fmt::format("must be at least 1 (got {})", num_bins));
   }
+  counts_.assign(static_cast<std::size_t>(num_bins), 0);
 }
 
 int RotationHistogram::bin_of(float angle_from_deg, float angle_to_deg) const {

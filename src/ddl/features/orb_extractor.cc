@@ -148,6 +148,33 @@ void OrbExtractorConfig::validate() const {
           "must be in 1..64");
 }
 
+void OrbExtractorConfig::validate_for_image(int width, int height) const {
+  validate();
+  const ScalePyramid pyramid = make_scale_pyramid(num_levels, scale_factor);
+  for (int level = 0; level < num_levels; ++level) {
+    // The level sizes of OrbExtractor::build_pyramid.
+    const float inv = pyramid.inv_scale_factors[level];
+    const int cols = level == 0 ? width : cvRound(width * inv);
+    const int rows = level == 0 ? height : cvRound(height * inv);
+    if (cols <= 2 * edge_threshold || rows <= 2 * edge_threshold) {
+      if (level == 0) {
+        throw ConfigError::for_key(
+            "orb.edge_threshold",
+            fmt::format("a {}x{} image is not more than 2 orb.edge_threshold ({}) px wide and "
+                        "high: no keypoint fits",
+                        width, height, 2 * edge_threshold));
+      }
+      throw ConfigError::for_key(
+          "orb.num_levels",
+          fmt::format("{} levels with scale factor {} make level {} of a {}x{} image {}x{} px, "
+                      "not more than 2 orb.edge_threshold ({}) in {}: it could hold no keypoint "
+                      "and its share of orb.num_features would be lost; use at most {} levels",
+                      num_levels, scale_factor, level, width, height, cols, rows,
+                      2 * edge_threshold, cols <= 2 * edge_threshold ? "width" : "height", level));
+    }
+  }
+}
+
 ScalePyramid make_scale_pyramid(int num_levels, double scale_factor) {
   ScalePyramid p;
   p.num_levels = num_levels;

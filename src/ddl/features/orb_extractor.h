@@ -38,6 +38,10 @@ struct OrbExtractorConfig {
 
   /// Throws ddl::ConfigError naming the key ("orb.num_features", ...) on a bad value.
   void validate() const;
+  /// validate(), and for images of `width` x `height`: throws ddl::ConfigError naming
+  /// "orb.num_levels" when a pyramid level is too small to hold a keypoint (not more than
+  /// 2 edge_threshold pixels wide or high). Such a level's share of num_features would be lost.
+  void validate_for_image(int width, int height) const;
 };
 
 /// Per-level scale values that tracking needs (ORB-SLAM2's mvScaleFactors, mvLevelSigma2, ...).

@@ -65,12 +65,11 @@ class LoopCloser::Protection {
     }
     keyframes_ = std::move(kept);
   }
-  /// The loop edges protect the loop's two keyframes from now on: the scope's own protection is
-  /// lifted without releasing them.
-  void hand_over_to_loop_edges() {
-    for (const map::KeyFramePtr& keyframe : keyframes_) keyframe->set_not_erase(false);
-    keyframes_.clear();
-  }
+  /// The loop edges protect the loop's two keyframes from now on: release() leaves a keyframe
+  /// with loop edges protected. One the correction gave no edge is released like any other, its
+  /// deferred cull included, and leaves the map and the database (review, stop 26: it was culled
+  /// without leaving them).
+  void hand_over_to_loop_edges() { release_all_but({}); }
 
  private:
   LoopCloser& closer_;

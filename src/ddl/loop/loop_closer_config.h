@@ -28,8 +28,10 @@ struct LoopDetectionConfig {
 /// Geometric verification of the candidates (ORB-SLAM2 LoopClosing::ComputeSim3 with the scale
 /// fixed: 3D-3D RANSAC with Horn's closed form, then matches by projection and pose refinement).
 struct LoopVerificationConfig {
-  float bow_ratio = 0.75f;               // Lowe ratio of the BoW matching against a candidate
-  int max_hamming = 50;                  // descriptor distance of every loop match at most (TH_LOW)
+  float bow_ratio = 0.75f;  // Lowe ratio of the BoW matching against a candidate
+  /// Descriptor distance of a loop match: below it in the BoW search (ORB-SLAM2's TH_LOW test),
+  /// at most it in the projection searches.
+  int max_hamming = 50;
   bool check_orientation = true;         // rotation-consistency histogram on the BoW matches
   int min_bow_matches = 20;              // fewer BoW matches: the candidate is dropped
   int ransac_max_iterations = 300;       // RANSAC hypotheses per candidate at most

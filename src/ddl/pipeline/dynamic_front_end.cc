@@ -186,8 +186,19 @@ void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const 
                                         const cv::Mat& dynamic_mask) {
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
   if (!config_.enabled || !config_.use_geometry) return;
+  // A mask that marked nothing is kept as none: the check reads an empty mask as unmasked.
+  const bool any_dynamic = !dynamic_mask.empty() && cv::countNonZero(dynamic_mask) > 0;
   std::lock_guard lock(cache_mutex_);
-  depth_cache_[keyframe->id()] = {depth_m, dynamic_mask};
+  depth_cache_[keyframe->id()] = {keyframe, depth_m, any_dynamic ? dynamic_mask : cv::Mat()};
+  if (depth_cache_.size() <= config_.keyframe_depth_cache) return;
+  // Culled keyframes leave first, then the oldest. Until stop 26 the oldest left first whatever
+  // else was there, with a limit of 30: a camera back in a place mapped more than 30 keyframes
+  // before had references without depth, and the check tested nothing (review; syn_static_loop,
+  // frames 914-1000).
+  for (auto it = depth_cache_.begin(); it != depth_cache_.end();) {
+    const map::KeyFramePtr kf = it->second.keyframe.lock();
+    it = (!kf || kf->is_bad()) ? depth_cache_.erase(it) : std::next(it);
+  }
   while (depth_cache_.size() > config_.keyframe_depth_cache)
     depth_cache_.erase(depth_cache_.begin());
 }

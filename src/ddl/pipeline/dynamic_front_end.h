@@ -138,8 +138,9 @@ class DynamicFrontEnd {
   std::function<cv::Mat(const cv::Mat&)> stored_mask_mapping_;
   cv::Mat source_area_;  // see set_source_area
   struct KeyframeImages {
+    std::weak_ptr<map::KeyFrame> keyframe;  // culled or gone: the first to leave the cache
     cv::Mat depth_m;
-    cv::Mat dynamic_mask;
+    cv::Mat dynamic_mask;  // empty when the mask marked nothing
   };
   std::map<map::KeyFrameId, KeyframeImages> depth_cache_;  // for the geometry check
   dynamics::DynamicMemory memory_;                         // tracking thread only

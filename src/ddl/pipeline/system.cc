@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <limits>
 
@@ -34,6 +35,15 @@ void SystemConfig::validate() const {
           key, fmt::format("is {} but tracking.frame.bf is {}: the three bf keys must be equal",
                            value, tracking.frame.bf));
     }
+  }
+  // The direct index: mapping lists the features of a keyframe whose bag of words tracking left
+  // empty at its own depth, and BoW matching compares node ids, so two depths share no node
+  // (review, stop 26).
+  if (mapping.bow_levels_up != tracking.frame.bow_levels_up) {
+    throw ConfigError::for_key(
+        "mapping.bow_levels_up",
+        fmt::format("is {} but tracking.frame.bow_levels_up is {}: the two must be equal",
+                    mapping.bow_levels_up, tracking.frame.bow_levels_up));
   }
 }
 
@@ -107,8 +117,10 @@ CnnMask System::segment(const io::RgbdFrame& frame) {
 cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
                                        DynamicMasks& masks) {
   const bool use_memory = dynamic_->memory_enabled();
-  if ((!config_.dynamic.use_geometry && !use_memory) || !last_reference_ ||
-      last_reference_->is_bad()) {
+  if ((!config_.dynamic.use_geometry && !use_memory) || !last_reference_) return {};
+  if (last_reference_->is_bad()) {
+    // Culled since the last frame (threaded mode): nothing to check against this frame.
+    ++stats_.geometry_checks_without_reference;
     return {};
   }
   // Loop closing may move the keyframes between the low-cost pose and the reading of the
@@ -142,6 +154,11 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     if (!LocalMappingGate::unchanged(stops_before, mapping_gate_.stop_sequence())) {
       ++stats_.geometry_checks_skipped;
       references.clear();  // no geometry mask for this frame
+    } else if (std::none_of(references.begin(), references.end(),
+                            [](const dynamics::ReferenceView& view) {
+                              return !view.depth_image_m.empty();
+                            })) {
+      ++stats_.geometry_checks_without_reference;  // the check tests nothing
     }
     masks.geometry = dynamic_->geometry_mask(frame, *T_c_w, references, &masks.geometry_stats,
                                              previous_pose(frame_changes));

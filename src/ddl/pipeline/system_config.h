@@ -36,7 +36,9 @@ struct DynamicConfig {
   /// ATE on syn_walking_xyz.
   int segmentation_interval = 2;
   int segmentation_reuse_dilation_px = 8;  // growth of a reused CNN mask (people move meanwhile)
-  std::size_t keyframe_depth_cache = 30;   // keyframe depth images kept for the geometry check
+  /// Keyframe depth images (and dynamic masks) kept for the geometry check's references, culled
+  /// keyframes dropped first, then the oldest: about 1.2 MB each at 640x480 (1.5 MB with a mask).
+  std::size_t keyframe_depth_cache = 200;
   segmentation::SegmenterConfig segmentation;
   dynamics::DepthTrimConfig depth_trim;      // CNN masks cut to their region's depth (spill)
   dynamics::PictureVetoConfig picture_veto;  // CNN regions standing in front of nothing dropped

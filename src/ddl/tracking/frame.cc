@@ -135,7 +135,11 @@ float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeomet
 FrameBuilder::FrameBuilder(const camera::PinholeCamera& camera,
                            const features::OrbExtractorConfig& orb, const FrameConfig& config)
     : geometry_(std::make_shared<const FrameGeometry>(FrameGeometry::from(camera, config))),
-      extractor_(orb) {}
+      extractor_(orb) {
+  // A level too small for a keypoint would take its share of the features and give none
+  // (review, stop 26).
+  orb.validate_for_image(geometry_->width, geometry_->height);
+}
 
 Frame FrameBuilder::build(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask, FrameId id) {
   const FrameGeometry& g = *geometry_;

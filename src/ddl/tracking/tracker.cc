@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
 #include "ddl/tracking/keyframe_creation.h"
@@ -76,6 +78,27 @@ Tracker::Tracker(const TrackerConfig& config, const camera::PinholeCamera& camer
         "build's extractor has {:016x}): train one with `ddl_slam vocab train` or use the one "
         "shipped in vocab/",
         vocabulary_->descriptor_tag(), tag));
+  }
+  // An idf vocabulary trained on one image weighs every word 0 (log(1 / 1)): every bag of words
+  // is empty, and relocalization and loop detection would silently find nothing (review, stop 26).
+  bool any_weight = false;
+  for (vocabulary::WordId w = 0; w < vocabulary_->word_count() && !any_weight; ++w) {
+    any_weight = vocabulary_->word_weight(w) > 0.0;
+  }
+  if (!any_weight) {
+    throw Error(
+        "every word of the vocabulary weighs 0 (an idf vocabulary trained on a single image?): "
+        "bags of words would be empty and relocalization and loop closing would find nothing; "
+        "train one on more images with `ddl_slam vocab train` or use the one shipped in vocab/");
+  }
+  // ORB-SLAM2's direct index sits at depth 2 (levels_up 4 of its 6 levels); the default suits the
+  // shipped 5-level vocabulary. Another depth works, with fewer or less selective BoW matches.
+  if (const int depth = vocabulary_->levels() - config_.frame.bow_levels_up; depth != 2) {
+    spdlog::warn(
+        "tracking.frame.bow_levels_up {} puts the direct index at depth {} of this {}-level "
+        "vocabulary; depth 2 (bow_levels_up {}) is what ORB-SLAM2 uses and the defaults assume",
+        config_.frame.bow_levels_up, std::max(0, depth), vocabulary_->levels(),
+        std::max(0, vocabulary_->levels() - 2));
   }
 }
 

@@ -170,7 +170,13 @@ Vocabulary Vocabulary::load(const std::string& path) {
   const MappedFile file(path);
   const std::size_t size = file.size();
   const unsigned char* p = file.data();
-  if (size < sizeof(kMagic) || std::memcmp(p, kMagic, sizeof(kMagic)) != 0) {
+  if (size == 0) throw InputError::at(path, "empty file (0 bytes)");
+  if (size < sizeof(kMagic)) {
+    throw InputError::at(
+        path, fmt::format("truncated: {} bytes, shorter than the {}-byte magic \"DDLVOCAB\"", size,
+                          sizeof(kMagic)));
+  }
+  if (std::memcmp(p, kMagic, sizeof(kMagic)) != 0) {
     throw InputError::at(path,
                          "not a DDL-SLAM vocabulary file (wrong magic; expected \"DDLVOCAB\")");
   }

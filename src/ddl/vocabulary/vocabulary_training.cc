@@ -236,6 +236,15 @@ Vocabulary train_vocabulary(const std::vector<cv::Mat>& image_descriptors,
     // The images are the input: blank or featureless pictures are bad input (exit code 2).
     throw InputError("vocabulary training: no ORB features in any of the training images");
   }
+  if ((config.weighting == Weighting::kTfIdf || config.weighting == Weighting::kIdf) &&
+      local_stats.images < 2) {
+    // idf = log(N / n_w) is 0 for every word when N = 1: every bag of words would be empty, and
+    // relocalization and loop detection would find nothing (review, stop 26).
+    throw InputError(
+        "vocabulary training: tf-idf and idf weighting need ORB features from at least 2 "
+        "training images (with one, every word's idf log(N / n) is 0); give more images or "
+        "choose tf or binary weighting");
+  }
   if (all.size() >= std::numeric_limits<std::uint32_t>::max()) {
     throw Error(fmt::format("vocabulary training: too many descriptors ({})", all.size()));
   }
