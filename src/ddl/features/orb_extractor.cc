@@ -148,14 +148,24 @@ void OrbExtractorConfig::validate() const {
           "must be in 1..64");
 }
 
+namespace {
+
+// Size of pyramid level `level` of an image of `size` (level 0 is the image itself), as
+// build_pyramid resizes it.
+cv::Size level_size(const ScalePyramid& pyramid, int level, cv::Size size) {
+  const float inv = pyramid.inv_scale_factors[level];
+  return {cvRound(size.width * inv), cvRound(size.height * inv)};
+}
+
+}  // namespace
+
 void OrbExtractorConfig::validate_for_image(int width, int height) const {
   validate();
   const ScalePyramid pyramid = make_scale_pyramid(num_levels, scale_factor);
   for (int level = 0; level < num_levels; ++level) {
-    // The level sizes of OrbExtractor::build_pyramid.
-    const float inv = pyramid.inv_scale_factors[level];
-    const int cols = level == 0 ? width : cvRound(width * inv);
-    const int rows = level == 0 ? height : cvRound(height * inv);
+    const cv::Size size = level_size(pyramid, level, {width, height});
+    const int cols = size.width;
+    const int rows = size.height;
     if (cols <= 2 * edge_threshold || rows <= 2 * edge_threshold) {
       if (level == 0) {
         throw ConfigError::for_key(
@@ -248,8 +258,7 @@ OrbExtractor& OrbExtractor::operator=(OrbExtractor&&) noexcept = default;
 void OrbExtractor::build_pyramid(const cv::Mat& gray) {
   levels_[0] = gray;
   for (int level = 1; level < config_.num_levels; ++level) {
-    const float inv = scale_pyramid_.inv_scale_factors[level];
-    const cv::Size size(cvRound(gray.cols * inv), cvRound(gray.rows * inv));
+    const cv::Size size = level_size(scale_pyramid_, level, gray.size());
     if (size.width < 1 || size.height < 1) {
       levels_[level].release();
       continue;

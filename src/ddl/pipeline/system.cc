@@ -120,7 +120,7 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
   if ((!config_.dynamic.use_geometry && !use_memory) || !last_reference_) return {};
   if (last_reference_->is_bad()) {
     // Culled since the last frame (threaded mode): nothing to check against this frame.
-    ++stats_.geometry_checks_without_reference;
+    if (config_.dynamic.use_geometry) ++stats_.geometry_checks_without_reference;
     return {};
   }
   // Loop closing may move the keyframes between the low-cost pose and the reading of the
