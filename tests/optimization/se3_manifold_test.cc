@@ -257,6 +257,30 @@ TEST(CostFunctions, PoseGraphEdgeJacobiansMatchCentralDifferences) {
   }
 }
 
+TEST(CostFunctions, PosePriorJacobianMatchesCentralDifferences) {
+  std::mt19937 rng(41);
+  for (int trial = 0; trial < 20; ++trial) {
+    const SE3 T_c_w = random_pose(rng);
+    const double noise = trial % 4 == 0 ? 1.5 : 0.05;  // far from the prior now and then
+    const SE3 T_prior = SE3::exp(random_twist(rng, noise)) * T_c_w;
+    Mat6d A = Mat6d::Random();
+    const Mat6d information = A * A.transpose() + Mat6d::Identity();
+    const Mat6d sqrt_info = Eigen::LLT<Mat6d>(information).matrixU();
+    const PosePriorCost cost(T_prior, sqrt_info);
+    const Vector x = ambient(T_c_w);
+    expect_cost_jacobians_match(cost, {x}, {true});
+    // The residual is the weighted twist log(T_c_w T_prior^-1): zero at the prior.
+    const double* ptrs[1] = {x.data()};
+    Vec6d r;
+    ASSERT_TRUE(cost.Evaluate(ptrs, r.data(), nullptr));
+    EXPECT_LT((r - sqrt_info * (T_c_w * T_prior.inverse()).log()).norm(), 1e-9);
+    const Vector x_prior = ambient(T_prior);
+    const double* at_prior[1] = {x_prior.data()};
+    ASSERT_TRUE(cost.Evaluate(at_prior, r.data(), nullptr));
+    EXPECT_LT(r.norm(), 1e-9);
+  }
+}
+
 TEST(CostFunctions, Chi2MatchesWhitenedResidual) {
   const CameraIntrinsics cam = tum1_camera();
   const SE3 T = SE3::exp((Vec6d() << 0.1, -0.2, 0.3, 0.05, 0.1, -0.02).finished());

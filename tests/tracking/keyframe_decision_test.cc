@@ -101,13 +101,43 @@ TEST(MotionModelTest, RepeatsTheLastRelativeMotion) {
   const SE3 T1 = step * T0;
   MotionModel model;
   EXPECT_FALSE(model.valid());
-  model.update(T1, T0);
+  model.update(T1, T0, 0.033);
   ASSERT_TRUE(model.valid());
+  EXPECT_EQ(model.interval_s(), 0.033);
   const SE3 predicted = model.predict(T1);
   const SE3 expected = step * T1;
   EXPECT_LT((predicted.matrix() - expected.matrix()).norm(), 1e-12);
+  // Jitter within the gap ratio repeats V as it is (ORB-SLAM2); a gap scales it to the time.
+  EXPECT_EQ(model.predict(T1, 0.040).matrix(), predicted.matrix());
+  EXPECT_EQ(model.gap_ratio(0.040), 1.0);
+  const SE3 three_steps = step * step * step * T1;
+  EXPECT_LT((model.predict(T1, 0.099).matrix() - three_steps.matrix()).norm(), 1e-9);
+  model.update(three_steps, T1, 0.099);  // learnt across the gap, predicted over one interval
+  EXPECT_LT((model.predict(three_steps, 0.033).matrix() - (step * three_steps).matrix()).norm(),
+            1e-9);
   model.reset();
   EXPECT_FALSE(model.valid());
+}
+
+TEST(MotionModelTest, PriorWidensAcrossAGap) {
+  MotionModel model;
+  model.update(SE3(), SE3(), 0.033);
+  MotionPriorConfig config;
+  config.sigma_translation_m = 0.005;
+  config.sigma_rotation_deg = 1.0;
+  const SE3 predicted(so3_exp(Vec3d(0.1, 0.0, 0.0)), Vec3d(0.0, 0.2, 0.0));
+  const optimization::PosePrior regular = model.prior(predicted, 0.036, config);  // jitter
+  EXPECT_EQ(regular.T_c_w.matrix(), predicted.matrix());
+  EXPECT_NEAR(regular.sqrt_information(0, 0), 200.0, 1e-9);
+  EXPECT_NEAR(regular.sqrt_information(5, 5), 180.0 / M_PI, 1e-9);
+  EXPECT_EQ(regular.sqrt_information(0, 1), 0.0);
+  // Seven intervals later: sigma x 7 (1 + 7) / 2 = 28.
+  const optimization::PosePrior gap = model.prior(predicted, 7 * 0.033, config);
+  EXPECT_NEAR(gap.sqrt_information(1, 1), 200.0 / 28.0, 1e-9);
+  EXPECT_NEAR(gap.sqrt_information(3, 3), 180.0 / M_PI / 28.0, 1e-9);
+  // Learnt across that gap, predicted over one interval: sigma x 1 (7 + 1) / 2 = 4.
+  model.update(SE3(), SE3(), 7 * 0.033);
+  EXPECT_NEAR(model.prior(predicted, 0.033, config).sqrt_information(2, 2), 200.0 / 4.0, 1e-9);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "config_error_check.h"
@@ -42,6 +43,12 @@ TEST(TrackerConfigTest, ErrorsNameTheKey) {
   c = TrackerConfig{};
   c.optimizer.pose_rounds = 0;
   EXPECT_TRUE(rejects(c, "tracking.optimizer.pose_rounds"));
+  c = TrackerConfig{};
+  c.motion_prior.sigma_translation_m = 0.0;
+  EXPECT_TRUE(rejects(c, "tracking.motion_prior.sigma_translation_m"));
+  c = TrackerConfig{};
+  c.motion_prior.sigma_rotation_deg = std::nan("");
+  EXPECT_TRUE(rejects(c, "tracking.motion_prior.sigma_rotation_deg"));
 }
 
 }  // namespace

@@ -107,6 +107,30 @@ TEST(TrackerTest, SameInputGivesIdenticalTrajectory) {
   EXPECT_EQ(a.keyframes_created, b.keyframes_created);
 }
 
+TEST(TrackerTest, MotionModelSpansDroppedFrames) {
+  // Frames 0-14, then 21-39: the velocity is scaled to the seven intervals of the gap (ORB-SLAM2
+  // would predict one interval's motion, miss the matches and fall back on the reference
+  // keyframe), and back to one interval for frame 22; the motion prior widens across the gap.
+  auto map = std::make_shared<map::Map>();
+  const TrackerConfig config = testing::test_tracker_config();
+  ASSERT_TRUE(config.motion_prior.enabled);
+  Tracker tracker(config, testing::test_camera(), map, testing::room_vocabulary(),
+                  std::make_shared<vocabulary::BowDatabase>());
+  const MappingStatus idle;
+  std::vector<std::size_t> fed;
+  for (std::size_t k = 0; k < room_sequence().frames.size(); ++k) {
+    if (k < 15 || k > 20) fed.push_back(k);
+  }
+  for (const std::size_t k : fed) {
+    const TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
+    if (k == 21) EXPECT_EQ(r.method, TrackingMethod::kMotionModel);
+    const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
+    EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
+    EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+  }
+}
+
 TEST(TrackerTest, LowCostPoseIsCloseToGroundTruth) {
   // DDL-SLAM Algorithm 1 with the split API: features once, the low-cost pose (last-frame
   // matching and motion-only BA, no local map), features of a "moving" region dropped, then the

@@ -153,6 +153,22 @@ bool PoseGraphEdgeCost::Evaluate(double const* const* parameters, double* residu
   return true;
 }
 
+PosePriorCost::PosePriorCost(const SE3& T_c_w_prior, const Mat6d& sqrt_information)
+    : T_w_c_prior_(T_c_w_prior.inverse()), sqrt_information_(sqrt_information) {}
+
+bool PosePriorCost::Evaluate(double const* const* parameters, double* residuals,
+                             double** jacobians) const {
+  const SE3 E = from_parameters(parameters[0]) * T_w_c_prior_;
+  const Vec6d e = E.log();
+  Eigen::Map<Vec6d> r(residuals);
+  r = sqrt_information_ * e;
+  if (jacobians == nullptr || jacobians[0] == nullptr) return true;
+  // T <- exp(d) T:  E <- exp(d) E, log(exp(d) E) ~= e + J_l(e)^-1 d.
+  const Eigen::Matrix<double, 6, 6> J = sqrt_information_ * se3_left_jacobian_inverse(e);
+  tangent_to_ambient<6>(J, parameters[0], jacobians[0]);
+  return true;
+}
+
 double reprojection_chi2(const CameraIntrinsics& camera, const SE3& T_c_w, const Vec3d& p_w,
                          const Measurement& measurement, double* depth_m) {
   const Vec3d p_c = T_c_w * p_w;

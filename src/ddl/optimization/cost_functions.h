@@ -93,6 +93,21 @@ class PoseGraphEdgeCost final
   Mat6d sqrt_information_;
 };
 
+/// Unary prior on a pose T_c_w (a prediction of it, e.g. the constant-velocity motion model):
+///   e = log(T_c_w * T_c_w_prior^-1)   (twist [rho; phi] in the camera frame, zero at the prior)
+///   r = L^T e with L L^T = information (6x6, [rho; phi] order).
+class PosePriorCost final : public ceres::SizedCostFunction<6, kPoseAmbientSize> {
+ public:
+  /// sqrt_information = L^T (upper triangular) of the information matrix.
+  PosePriorCost(const SE3& T_c_w_prior, const Mat6d& sqrt_information);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  SE3 T_w_c_prior_;  // inverse of the prior
+  Mat6d sqrt_information_;
+};
+
 /// chi2 = inv_sigma2 * |prediction - observation|^2 of one measurement at the pose T_c_w, and the
 /// depth z of p_w in that camera (when depth_m is non-null).
 double reprojection_chi2(const CameraIntrinsics& camera, const SE3& T_c_w, const Vec3d& p_w,

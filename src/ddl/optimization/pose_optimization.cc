@@ -23,7 +23,7 @@ constexpr std::size_t kMinObservationsForRounds = 10;
 
 PoseOptimizationResult optimize_pose(const CameraIntrinsics& camera, const SE3& T_c_w_initial,
                                      std::span<const PoseObservation> observations,
-                                     const OptimizerConfig& config) {
+                                     const OptimizerConfig& config, const PosePrior* prior) {
   camera.validate();
   config.validate();
   const std::size_t n = observations.size();
@@ -62,6 +62,12 @@ PoseOptimizationResult optimize_pose(const CameraIntrinsics& camera, const SE3& 
           new PoseReprojectionCost<2>(camera, obs.p_w, obs.measurement, &active[i]), &mono_loss,
           x.data());
     }
+  }
+
+  if (prior != nullptr) {
+    if (!prior->sqrt_information.allFinite()) throw Error("pose prior: information is not finite");
+    problem.AddResidualBlock(new PosePriorCost(prior->T_c_w, prior->sqrt_information), nullptr,
+                             x.data());
   }
 
   ceres::Solver::Options options =

@@ -28,6 +28,14 @@ struct PoseObservation {
   Measurement measurement;
 };
 
+/// A Gaussian prior on the pose (e.g. the motion model's prediction): the cost
+/// |L^T log(T_c_w * T_c_w_prior^-1)|^2 joins the reprojection residuals in every round, with no
+/// robust kernel. sqrt_information = L^T of the information matrix ([rho; phi] order).
+struct PosePrior {
+  SE3 T_c_w;
+  Mat6d sqrt_information = Mat6d::Identity();
+};
+
 struct PoseOptimizationResult {
   SE3 T_c_w;                  ///< optimised pose (the initial pose when !optimized)
   std::vector<bool> inliers;  ///< per observation: inlier after the last round's classification
@@ -41,6 +49,7 @@ struct PoseOptimizationResult {
 /// ddl::ConfigError when camera or config do not validate.
 PoseOptimizationResult optimize_pose(const CameraIntrinsics& camera, const SE3& T_c_w_initial,
                                      std::span<const PoseObservation> observations,
-                                     const OptimizerConfig& config);
+                                     const OptimizerConfig& config,
+                                     const PosePrior* prior = nullptr);
 
 }  // namespace ddl::optimization

@@ -2,27 +2,51 @@
 // Constant-velocity motion model (ORB-SLAM2 Tracking::TrackWithMotionModel): the relative motion
 // between the last two tracked frames is assumed to repeat, T_c_w(k+1) = V * T_c_w(k) with
 // V = T_c_w(k) * T_w_c(k-1) (the previous camera in the current camera's frame).
+//
+// Unlike ORB-SLAM2 it knows the time V was learnt over: across a gap (dropped frames, or a
+// velocity learnt across one) the motion is scaled to the time that passed, V^(elapsed/learnt).
+// Within kGapRatio of the learnt interval (a regular camera's timestamp jitter) V repeats as is.
 
 #include "ddl/core/se3.h"
+#include "ddl/optimization/pose_optimization.h"
+#include "ddl/tracking/tracker_config.h"
 
 namespace ddl::tracking {
 
 class MotionModel {
  public:
+  /// Intervals that differ by this factor or more are a gap, not jitter.
+  static constexpr double kGapRatio = 1.5;
+
   bool valid() const { return valid_; }
   void reset() { valid_ = false; }
-  /// Learns V from the pose of the frame just tracked and the pose of the one before it.
-  void update(const SE3& T_c_w_current, const SE3& T_c_w_previous) {
+  /// Learns V from the pose of the frame just tracked and the pose of the one before it, taken
+  /// interval_s apart (0: unknown).
+  void update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s = 0.0) {
     velocity_ = T_c_w_current * T_c_w_previous.inverse();
+    interval_s_ = interval_s;
     valid_ = true;
   }
-  /// Predicted T_c_w of the next frame (precondition: valid()).
-  SE3 predict(const SE3& T_c_w_last) const { return velocity_ * T_c_w_last; }
+  /// elapsed_s / interval_s() when that is a gap (see kGapRatio), else 1 (also when either time
+  /// is unknown or not positive).
+  double gap_ratio(double elapsed_s) const;
+  /// Predicted T_c_w of a frame elapsed_s after the last one (precondition: valid()); elapsed_s
+  /// 0 (unknown) repeats V once.
+  SE3 predict(const SE3& T_c_w_last, double elapsed_s = 0.0) const;
+  /// The prediction T_c_w_predicted (of a frame elapsed_s after the last one) as a Gaussian pose
+  /// prior: config's sigmas for one regular interval, widened across a gap (a velocity learnt
+  /// over L and extrapolated over E misses a E (L + E) / 2 under an acceleration a, against
+  /// a h^2 over one interval h = min(L, E)).
+  optimization::PosePrior prior(const SE3& T_c_w_predicted, double elapsed_s,
+                                const MotionPriorConfig& config) const;
   /// V = T_current_previous.
   const SE3& velocity() const { return velocity_; }
+  /// Time between the two frames V was learnt from [s] (0: unknown).
+  double interval_s() const { return interval_s_; }
 
  private:
   SE3 velocity_;
+  double interval_s_ = 0.0;
   bool valid_ = false;
 };
 

@@ -14,7 +14,13 @@ FramePoseEstimator::FramePoseEstimator(const FrameGeometry& geometry,
   config_.validate();
 }
 
-int FramePoseEstimator::optimize(Frame& frame) {
+int FramePoseEstimator::optimize(Frame& frame) { return run(frame, nullptr); }
+
+int FramePoseEstimator::optimize_with_prior(Frame& frame, const optimization::PosePrior& prior) {
+  return run(frame, &prior);
+}
+
+int FramePoseEstimator::run(Frame& frame, const optimization::PosePrior* prior) {
   const map::FrameFeatures& f = frame.features();
   observations_.clear();
   slots_.clear();
@@ -33,7 +39,7 @@ int FramePoseEstimator::optimize(Frame& frame) {
     slots_.push_back(i);
   }
   const optimization::PoseOptimizationResult result =
-      optimization::optimize_pose(intrinsics_, frame.T_c_w(), observations_, config_);
+      optimization::optimize_pose(intrinsics_, frame.T_c_w(), observations_, config_, prior);
   if (!result.optimized) return 0;
   frame.set_T_c_w(result.T_c_w);
   for (std::size_t k = 0; k < slots_.size(); ++k) frame.set_outlier(slots_[k], !result.inliers[k]);

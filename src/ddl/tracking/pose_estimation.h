@@ -25,8 +25,12 @@ class FramePoseEstimator {
   /// the outlier flags of all matches. Returns the number of inliers (0 and nothing changed
   /// with fewer than 3 matches).
   virtual int optimize(Frame& frame);
+  /// The same with a Gaussian prior on the pose (the motion model's prediction).
+  int optimize_with_prior(Frame& frame, const optimization::PosePrior& prior);
 
  private:
+  int run(Frame& frame, const optimization::PosePrior* prior);
+
   optimization::CameraIntrinsics intrinsics_;
   optimization::OptimizerConfig config_;
   std::vector<optimization::PoseObservation> observations_;

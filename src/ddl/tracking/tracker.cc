@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
@@ -106,6 +107,7 @@ Frame Tracker::prepare_frame(const io::RgbdFrame& frame, const cv::Mat& dynamic_
   const Stopwatch watch;
   Frame prepared = builder_.build(frame, dynamic_mask, next_frame_id_++);
   prepared_ = PreparedFrame{};
+  motion_prior_.reset();
   prepared_.frame_id = prepared.id();
   prepared_.frame_index = frame.index;
   prepared_.features_ms = watch.elapsed_ms();
@@ -137,7 +139,7 @@ std::size_t Tracker::exclude_features(Frame& frame, const cv::Mat& mask) {
       frame.matched_count() < matched_before) {
     // The low-cost pose saw the dropped matches: estimate it again from the static ones.
     map_->read_consistent([&] {
-      estimator_.optimize(frame);
+      optimize_pose(frame);
       prepared_.initial_pose_ok = discard_outliers(frame) >= config_.matching.min_map_matches;
     });
     if (!prepared_.initial_pose_ok) {
@@ -228,6 +230,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
       ok = estimate_initial_pose(frame, result.method);
     } else {
       result.method = TrackingMethod::kRelocalization;
+      motion_prior_.reset();
       ok = relocalize(frame);
     }
     result.timings.initial_pose_ms = stage.elapsed_ms();
@@ -260,7 +263,8 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
   state_ = state;
   result.state = state;
   if (last_frame_tracked_ && last_frame_.has_pose()) {
-    motion_model_.update(frame.T_c_w(), last_frame_.T_c_w());
+    motion_model_.update(frame.T_c_w(), last_frame_.T_c_w(),
+                         frame.timestamp_s() - last_frame_.timestamp_s());
   } else {
     motion_model_.reset();
   }
@@ -297,6 +301,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
 
 bool Tracker::estimate_initial_pose(Frame& frame, TrackingMethod& method) {
   refresh_last_frame();
+  motion_prior_.reset();
   if (motion_model_.valid() && frame.id() >= last_relocalization_frame_id_ + 2) {
     method = TrackingMethod::kMotionModel;
     if (track_motion_model(frame)) return true;
@@ -340,6 +345,7 @@ void Tracker::refresh_last_frame() {
 }
 
 bool Tracker::track_reference_keyframe(Frame& frame) {
+  motion_prior_.reset();  // the motion model failed or is not valid
   if (!reference_keyframe_ || !last_frame_.has_pose()) return false;
   frame.compute_bow(*vocabulary_, config_.frame.bow_levels_up);
   std::vector<map::MapPointPtr> matches;
@@ -353,7 +359,11 @@ bool Tracker::track_reference_keyframe(Frame& frame) {
 }
 
 bool Tracker::track_motion_model(Frame& frame) {
-  frame.set_T_c_w(motion_model_.predict(last_frame_.T_c_w()));
+  const double elapsed_s = frame.timestamp_s() - last_frame_.timestamp_s();
+  frame.set_T_c_w(motion_model_.predict(last_frame_.T_c_w(), elapsed_s));
+  if (config_.motion_prior.enabled) {
+    motion_prior_ = motion_model_.prior(frame.T_c_w(), elapsed_s, config_.motion_prior);
+  }
   frame.clear_map_points();
   const float radius = config_.matching.motion_search_radius_px;
   int count = matcher_.match_last_frame(frame, last_frame_, radius);
@@ -361,8 +371,11 @@ bool Tracker::track_motion_model(Frame& frame) {
     frame.clear_map_points();
     count = matcher_.match_last_frame(frame, last_frame_, 2.0f * radius);
   }
-  if (count < config_.matching.motion_min_matches) return false;
-  estimator_.optimize(frame);
+  if (count < config_.matching.motion_min_matches) {
+    motion_prior_.reset();
+    return false;
+  }
+  optimize_pose(frame);
   return discard_outliers(frame) >= config_.matching.min_map_matches;
 }
 
@@ -380,7 +393,7 @@ bool Tracker::track_local_map(Frame& frame, TrackingTimings& timings) {
   const int added = local_map_.search(frame, radius, matcher_);
   timings.local_map_search_ms = watch.elapsed_ms();
   watch.reset();
-  estimator_.optimize(frame);
+  optimize_pose(frame);
   timings.local_map_pose_ms = watch.elapsed_ms();
 
   int inliers = 0;
@@ -402,6 +415,11 @@ bool Tracker::track_local_map(Frame& frame, TrackingTimings& timings) {
     return false;
   }
   return inliers >= config_.matching.local_map_min_inliers;
+}
+
+int Tracker::optimize_pose(Frame& frame) {
+  return motion_prior_ ? estimator_.optimize_with_prior(frame, *motion_prior_)
+                       : estimator_.optimize(frame);
 }
 
 bool Tracker::relocalize(Frame& frame) {

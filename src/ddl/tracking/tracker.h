@@ -126,6 +126,8 @@ class Tracker {
   /// points replaced by fusion swapped for their replacements.
   void refresh_last_frame();
   void reset(TrackingResult& result);
+  /// Motion-only BA of the frame, with the motion model's prior while the frame has one.
+  int optimize_pose(Frame& frame);
 
   TrackerConfig config_;
   std::shared_ptr<map::Map> map_;
@@ -138,6 +140,7 @@ class Tracker {
   LocalMap local_map_;
   Relocalizer relocalizer_;
   MotionModel motion_model_;
+  std::optional<optimization::PosePrior> motion_prior_;  // of the frame being tracked
   TrajectoryRecorder trajectory_;
 
   std::atomic<TrackingState> state_{TrackingState::kNotInitialized};

@@ -95,6 +95,12 @@ void validate_relocalization(const RelocalizationConfig& c) {
   require_count(c.retry_max_distance, 0, 256, p + "retry_max_distance");
 }
 
+void validate_motion_prior(const MotionPriorConfig& c) {
+  const std::string p = "tracking.motion_prior.";
+  require_positive(c.sigma_translation_m, p + "sigma_translation_m");
+  require_positive(c.sigma_rotation_deg, p + "sigma_rotation_deg");
+}
+
 }  // namespace
 
 void TrackerConfig::validate() const {
@@ -113,6 +119,7 @@ void TrackerConfig::validate() const {
   validate_matching(matching);
   validate_keyframes(keyframes);
   validate_relocalization(relocalization);
+  validate_motion_prior(motion_prior);
   require_count(init_min_features, 0, 1000000, "tracking.init_min_features");
   require_count(init_min_depth_features, 0, 1000000, "tracking.init_min_depth_features");
   require(reset_when_lost_max_keyframes >= -1, "tracking.reset_when_lost_max_keyframes",

@@ -75,12 +75,26 @@ struct RelocalizationConfig {
   int retry_max_distance = 64;          // ... and its Hamming threshold
 };
 
+/// A Gaussian prior on the pose of a frame tracked with the motion model: its constant-velocity
+/// prediction joins the motion-only BA of motion-model and local-map tracking as a 6-dof
+/// residual (not in ORB-SLAM2). It holds the pose where the features constrain it weakly or
+/// pull it off together (motion blur in fast rotation, depth mostly beyond a few metres), which
+/// otherwise lets a few frames drift by centimetres (docs/tracking.md, "Motion prior"). The
+/// sigmas hold for one frame interval of the velocity; after a longer gap (dropped frames) they
+/// grow with the square of the ratio of the intervals.
+struct MotionPriorConfig {
+  bool enabled = true;                 // add the prior (false: ORB-SLAM2's motion-only BA)
+  double sigma_translation_m = 0.005;  // per axis, deviation from the prediction [m]
+  double sigma_rotation_deg = 1.0;     // per axis, deviation from the prediction [deg]
+};
+
 struct TrackerConfig {
   features::OrbExtractorConfig orb;         // feature extraction (ORB-SLAM2 TUM: 1000, 1.2, 8)
   FrameConfig frame;                        // depth handling, virtual baseline
   MatchingConfig matching;                  // tracking searches
   KeyFrameConfig keyframes;                 // keyframe decision and creation
   RelocalizationConfig relocalization;      // recovery after tracking loss
+  MotionPriorConfig motion_prior;           // the motion model's prediction as a pose prior
   optimization::OptimizerConfig optimizer;  // motion-only BA schedule (pose_* fields)
   int init_min_features = 500;              // the first frame needs more keypoints than this
   int init_min_depth_features = 100;        // ... and this many of them with depth (map points)

@@ -1,0 +1,36 @@
+#include "ddl/tracking/motion_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ddl::tracking {
+
+double MotionModel::gap_ratio(double elapsed_s) const {
+  if (!(interval_s_ > 0.0) || !(elapsed_s > 0.0)) return 1.0;
+  const double ratio = elapsed_s / interval_s_;
+  return ratio >= kGapRatio || ratio <= 1.0 / kGapRatio ? ratio : 1.0;
+}
+
+SE3 MotionModel::predict(const SE3& T_c_w_last, double elapsed_s) const {
+  const double ratio = gap_ratio(elapsed_s);
+  if (ratio == 1.0) return velocity_ * T_c_w_last;
+  return SE3::exp(ratio * velocity_.log()) * T_c_w_last;
+}
+
+optimization::PosePrior MotionModel::prior(const SE3& T_c_w_predicted, double elapsed_s,
+                                           const MotionPriorConfig& config) const {
+  double scale = 1.0;
+  if (gap_ratio(elapsed_s) != 1.0) {
+    const double h = std::min(interval_s_, elapsed_s);
+    scale = elapsed_s * (interval_s_ + elapsed_s) / (2.0 * h * h);
+  }
+  const double t = 1.0 / (scale * config.sigma_translation_m);
+  const double r = 1.0 / (scale * config.sigma_rotation_deg * M_PI / 180.0);
+  optimization::PosePrior prior;
+  prior.T_c_w = T_c_w_predicted;
+  prior.sqrt_information = Mat6d::Zero();
+  prior.sqrt_information.diagonal() << t, t, t, r, r, r;
+  return prior;
+}
+
+}  // namespace ddl::tracking
