@@ -124,7 +124,9 @@ TEST(TrackerTest, MotionModelSpansDroppedFrames) {
   for (const std::size_t k : fed) {
     const TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
-    if (k == 21) EXPECT_EQ(r.method, TrackingMethod::kMotionModel);
+    if (k == 21) {
+      EXPECT_EQ(r.method, TrackingMethod::kMotionModel);
+    }
     const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
     EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
     EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;

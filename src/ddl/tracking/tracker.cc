@@ -4,7 +4,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cmath>
 
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
@@ -107,7 +106,7 @@ Frame Tracker::prepare_frame(const io::RgbdFrame& frame, const cv::Mat& dynamic_
   const Stopwatch watch;
   Frame prepared = builder_.build(frame, dynamic_mask, next_frame_id_++);
   prepared_ = PreparedFrame{};
-  motion_prior_.reset();
+  motion_prior_.reset();  // set only by motion-model tracking of this frame
   prepared_.frame_id = prepared.id();
   prepared_.frame_index = frame.index;
   prepared_.features_ms = watch.elapsed_ms();
@@ -230,7 +229,6 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
       ok = estimate_initial_pose(frame, result.method);
     } else {
       result.method = TrackingMethod::kRelocalization;
-      motion_prior_.reset();
       ok = relocalize(frame);
     }
     result.timings.initial_pose_ms = stage.elapsed_ms();
@@ -301,7 +299,6 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
 
 bool Tracker::estimate_initial_pose(Frame& frame, TrackingMethod& method) {
   refresh_last_frame();
-  motion_prior_.reset();
   if (motion_model_.valid() && frame.id() >= last_relocalization_frame_id_ + 2) {
     method = TrackingMethod::kMotionModel;
     if (track_motion_model(frame)) return true;
@@ -345,7 +342,7 @@ void Tracker::refresh_last_frame() {
 }
 
 bool Tracker::track_reference_keyframe(Frame& frame) {
-  motion_prior_.reset();  // the motion model failed or is not valid
+  motion_prior_.reset();  // set by a motion-model attempt that failed
   if (!reference_keyframe_ || !last_frame_.has_pose()) return false;
   frame.compute_bow(*vocabulary_, config_.frame.bow_levels_up);
   std::vector<map::MapPointPtr> matches;
@@ -371,10 +368,7 @@ bool Tracker::track_motion_model(Frame& frame) {
     frame.clear_map_points();
     count = matcher_.match_last_frame(frame, last_frame_, 2.0f * radius);
   }
-  if (count < config_.matching.motion_min_matches) {
-    motion_prior_.reset();
-    return false;
-  }
+  if (count < config_.matching.motion_min_matches) return false;
   optimize_pose(frame);
   return discard_outliers(frame) >= config_.matching.min_map_matches;
 }

@@ -79,9 +79,9 @@ struct RelocalizationConfig {
 /// prediction joins the motion-only BA of motion-model and local-map tracking as a 6-dof
 /// residual (not in ORB-SLAM2). It holds the pose where the features constrain it weakly or
 /// pull it off together (motion blur in fast rotation, depth mostly beyond a few metres), which
-/// otherwise lets a few frames drift by centimetres (docs/tracking.md, "Motion prior"). The
-/// sigmas hold for one frame interval of the velocity; after a longer gap (dropped frames) they
-/// grow with the square of the ratio of the intervals.
+/// otherwise lets a few frames drift by centimetres (docs/tracking.md, "Motion model and motion
+/// prior"). The sigmas hold for one frame interval of the velocity; across a timestamp gap
+/// (dropped frames) they grow by E (L + E) / (2 min(L, E)^2), MotionModel::prior.
 struct MotionPriorConfig {
   bool enabled = true;                 // add the prior (false: ORB-SLAM2's motion-only BA)
   double sigma_translation_m = 0.005;  // per axis, deviation from the prediction [m]
