@@ -133,6 +133,52 @@ TEST(TrackerTest, MotionModelSpansDroppedFrames) {
   }
 }
 
+TEST(TrackerTest, TheMotionPriorJoinsOnlyMotionModelTracking) {
+  // Frame 1 has no velocity yet and is tracked against the reference keyframe, without a prior;
+  // later frames by the motion model, with it; none with the prior switched off.
+  for (const bool enabled : {true, false}) {
+    TrackerConfig config = testing::test_tracker_config();
+    config.motion_prior.enabled = enabled;
+    const testing::SequenceRun run = testing::track_sequence(12, false, config);
+    std::size_t with_prior = 0;
+    for (std::size_t k = 1; k < run.results.size(); ++k) {
+      const TrackingResult& r = run.results[k];
+      ASSERT_TRUE(r.tracked()) << "frame " << k;
+      if (k == 1) {
+        EXPECT_EQ(r.method, TrackingMethod::kReferenceKeyFrame);
+      }
+      EXPECT_EQ(r.motion_prior_used, enabled && r.method == TrackingMethod::kMotionModel)
+          << "frame " << k << (enabled ? ", prior on" : ", prior off");
+      with_prior += r.motion_prior_used ? 1 : 0;
+    }
+    EXPECT_EQ(with_prior, enabled ? run.results.size() - 2 : 0u);
+  }
+}
+
+TEST(TrackerTest, NoMotionPriorAfterTheMotionModelFailed) {
+  // Frames 0-5, then frame 20 stamped one interval after frame 5: the constant-velocity
+  // prediction is far off, its search finds too few matches, and the reference keyframe tracks
+  // the frame, without the prior the failed attempt had set.
+  constexpr std::size_t kJump = 20;
+  auto map = std::make_shared<map::Map>();
+  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
+                  testing::room_vocabulary(), std::make_shared<vocabulary::BowDatabase>());
+  const MappingStatus idle;
+  for (std::size_t k = 0; k <= 5; ++k) {
+    ASSERT_TRUE(tracker.track(room_sequence().frames[k], cv::Mat(), idle).tracked());
+  }
+  io::RgbdFrame jump = room_sequence().frames[kJump];
+  jump.index = 6;
+  jump.timestamp_s = room_sequence().frames[6].timestamp_s;
+  const TrackingResult r = tracker.track(std::move(jump), cv::Mat(), idle);
+  ASSERT_TRUE(r.tracked());
+  EXPECT_EQ(r.method, TrackingMethod::kReferenceKeyFrame);
+  EXPECT_FALSE(r.motion_prior_used);
+  const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(kJump));
+  EXPECT_LT(e.translation_m, 0.01);
+  EXPECT_LT(e.rotation_deg, 0.5);
+}
+
 TEST(TrackerTest, AbruptSpeedChangesAreTrackedDespiteTheMotionPrior) {
   // Frames 0-14, then every third frame up to 30, then every frame, stamped at a steady 30 Hz: the
   // camera triples its speed within one interval and drops back (no timestamp gap tells). The

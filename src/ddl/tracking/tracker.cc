@@ -239,6 +239,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     stage.reset();
     ok = track_local_map(frame, result.timings);
     result.timings.local_map_ms = stage.elapsed_ms();
+    result.motion_prior_used = motion_prior_.has_value();
   }
 
   if (!ok) {
