@@ -33,8 +33,16 @@ struct BenchArgs {
   std::vector<std::string> sequences;
   std::string suite;
   std::string output_dir = "out/bench";
-  bool reuse_baseline = false;  // take finished --no-dynamic runs from output_dir
+  bool reuse_baseline = false;       // take finished --no-dynamic runs from output_dir
+  std::string baseline_config_path;  // settings of the --no-dynamic runs (empty: run.config_path)
   RunArgs run;  // settings shared by every run (sequence, output_dir and no_dynamic set per run)
+
+  /// The arguments of the --no-dynamic column's runs (before sequence and output folder).
+  RunArgs baseline_run() const {
+    RunArgs baseline = run;
+    if (!baseline_config_path.empty()) baseline.config_path = baseline_config_path;
+    return baseline;
+  }
 };
 
 struct Sequence {
@@ -105,6 +113,8 @@ json settings_json(const BenchArgs& args, std::size_t sequences) {
           {"max_frames", r.max_frames},
           {"first_frame", r.first_frame},
           {"config", r.config_path.empty() ? "defaults" : r.config_path},
+          {"baseline_config",
+           args.baseline_config_path.empty() ? "as config" : args.baseline_config_path},
           {"camera", r.camera.empty() ? "per folder" : r.camera},
           {"segmentation", r.segmentation.empty() ? "from the settings" : r.segmentation},
           {"sequences", sequences},
@@ -130,9 +140,10 @@ int bench(const BenchArgs& args) {
   const fs::path out_dir(args.output_dir);
   create_folder(out_dir, "the benchmark's outputs");
 
-  // The settings are the same for every sequence: a bad --config, --mode or --segmentation is
-  // reported once, as bad input (exit 2), before any run.
+  // The settings are the same for every sequence: a bad --config, --baseline-config, --mode or
+  // --segmentation is reported once, as bad input (exit 2), before any run.
   make_system_config(args.run);
+  if (!args.baseline_config_path.empty()) make_system_config(args.baseline_run());
   // Every sequence is opened once too, as its runs will open it: its camera (from --camera, its
   // folder name or its camera.yaml), its lists, the images they name and its ground truth. A
   // malformed one stops the bench before its first run (exit code 2), not halfway through.
@@ -176,7 +187,7 @@ int bench(const BenchArgs& args) {
       const char* column = dynamic ? "dynamic" : "no_dynamic";
       std::fprintf(stderr, "bench [%zu/%zu] %s, %s\n", i + 1, sequences.size(), seq.name.c_str(),
                    dynamic ? "with dynamic removal" : "without dynamic removal (--no-dynamic)");
-      RunArgs run = args.run;
+      RunArgs run = dynamic ? args.run : args.baseline_run();
       run.sequence = seq.dir;
       run.output_dir = (out_dir / seq.name / column).string();
       run.no_dynamic = !dynamic;
@@ -245,6 +256,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--config", args->run.config_path,
                   "System settings (YAML) for every run, as `ddl_slam run --config`");
+  cmd->add_option("--baseline-config", args->baseline_config_path,
+                  "System settings (YAML) for the --no-dynamic column's runs instead of --config, "
+                  "e.g. `tracking: {motion_prior: {enabled: false}}` for ORB-SLAM2's motion-only "
+                  "BA (docs/evaluation.md)");
   cmd->add_option("--camera", args->run.camera,
                   "Camera for every sequence (tum1, tum2, tum3, bonn, synthetic or a YAML file); "
                   "default: per folder, as `ddl_slam run`");

@@ -184,6 +184,40 @@ TEST_F(Bench, WritesBothColumnsAndTheImprovement) {
   EXPECT_EQ(reused["ate"]["rows"][0]["ours"], tables["ate"]["rows"][0]["ours"]);  // deterministic
 }
 
+TEST_F(Bench, BaselineConfigSetsTheNoDynamicColumnOnly) {
+  // --baseline-config replaces --config for the --no-dynamic runs: ORB-SLAM2's motion-only BA
+  // (no motion prior) there, this project's core with dynamic removal.
+  const fs::path out = *root_ / "out_baseline";
+  const fs::path config = *root_ / "bench_config_b.yaml";
+  std::ofstream(config) << "dynamic:\n  geometry:\n    max_seed_fraction: 1.0\n";
+  const fs::path baseline = *root_ / "orb_slam2_baseline.yaml";
+  std::ofstream(baseline) << "tracking:\n  motion_prior:\n    enabled: false\n";
+  std::string log;
+  ASSERT_EQ(run_shell(command("--sequences '" + (*root_ / "walk").string() + "' --out '" +
+                              out.string() + "' --no-octomap --no-inpainting --segmentation none" +
+                              " --max-frames 20 --config '" + config.string() +
+                              "' --baseline-config '" + baseline.string() + "'"),
+                      *root_ / "bench_baseline.log", &log),
+            0)
+      << log;
+  auto prior_enabled = [&](const char* column) {
+    std::ifstream in(out / "walk" / column / "config.yaml");
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string yaml = text.str();
+    const std::size_t section = yaml.find("motion_prior:");
+    EXPECT_NE(section, std::string::npos) << column;
+    const std::size_t key = yaml.find("enabled:", section);
+    EXPECT_NE(key, std::string::npos) << column;
+    return yaml.substr(key, 14).find("true") != std::string::npos;
+  };
+  EXPECT_TRUE(prior_enabled("dynamic"));
+  EXPECT_FALSE(prior_enabled("no_dynamic"));
+  const json tables = read_json(out / "tables.json");
+  EXPECT_EQ(tables["settings"]["baseline_config"], baseline.string());
+  EXPECT_EQ(tables["settings"]["config"], config.string());
+}
+
 TEST_F(Bench, MovedObjectRegionCoversTheRenderedBox) {
   const fs::path dir = *root_ / "sit";
   const auto source = synthetic::make_sequence_source(*sitting_);
@@ -263,6 +297,14 @@ TEST(BenchInput, BadInputNamesTheFolder) {
   const std::size_t first = log.find("nonsense_key");
   ASSERT_NE(first, std::string::npos) << log;
   EXPECT_EQ(log.find("nonsense_key", first + 1), std::string::npos) << log;
+  // A bad --baseline-config too, though --config is fine.
+  EXPECT_EQ(
+      run_shell(Bench::command("--sequences '" + no_gt.string() + "' --baseline-config '" +
+                               bad_config.string() + "' --out '" + (root / "bad3b").string() + "'"),
+                root / "bad3b.log", &log),
+      2);
+  EXPECT_NE(log.find("nonsense_key"), std::string::npos) << log;
+  EXPECT_NE(log.find(bad_config.string()), std::string::npos) << log;
 
   // Review finding (stop 24): a sequence whose camera cannot be told (no camera in its name, no
   // camera.yaml) failed only when its turn came, after the runs before it, with exit 1.
