@@ -213,6 +213,11 @@ TEST_F(Bench, BaselineConfigSetsTheNoDynamicColumnOnly) {
   };
   EXPECT_TRUE(prior_enabled("dynamic"));
   EXPECT_FALSE(prior_enabled("no_dynamic"));
+  // The runs used it accordingly: from frame 2 on the motion model tracks, with the prior.
+  const json ours = read_json(out / "walk" / "dynamic" / "summary.json");
+  const json plain = read_json(out / "walk" / "no_dynamic" / "summary.json");
+  EXPECT_GE(ours["statistics"]["frames_with_motion_prior"].get<int>(), 10) << ours["statistics"];
+  EXPECT_EQ(plain["statistics"]["frames_with_motion_prior"].get<int>(), 0);
   const json tables = read_json(out / "tables.json");
   EXPECT_EQ(tables["settings"]["baseline_config"], baseline.string());
   EXPECT_EQ(tables["settings"]["config"], config.string());
