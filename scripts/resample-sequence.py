@@ -113,33 +113,34 @@ def main():
     if args.keep_stamps:  # the source's ground truth holds for the same stamps
         os.symlink(os.path.abspath(os.path.join(args.source, "groundtruth.txt")),
                    paths["groundtruth"])
-    truth_out = os.devnull if args.keep_stamps else paths["groundtruth"]
+    truth_lines = []  # re-stamped ground truth (not with --keep-stamps)
     with open(paths["associations"], "w") as fa, open(paths["rgb"], "w") as fr, \
-            open(paths["depth"], "w") as fd, open(truth_out, "w") as fg:
+            open(paths["depth"], "w") as fd:
         fr.write("# timestamp filename\n")
         fd.write("# timestamp filename\n")
-        fg.write(f"# resampled from {os.path.abspath(args.source)} with --pattern {args.pattern}\n")
-        fg.write("# timestamp tx ty tz qx qy qz qw\n")
         for k, j in enumerate(chosen):
             rgb_stamp, rgb_file, depth_stamp, depth_file = assoc[j][:4]
-            t = float(rgb_stamp) if args.keep_stamps else t0 + k * interval
-            t_depth = t + (float(depth_stamp) - float(rgb_stamp))
-            if args.keep_stamps:
-                fa.write(f"{rgb_stamp} {rgb_file} {depth_stamp} {depth_file}\n")
-                fr.write(f"{rgb_stamp} {rgb_file}\n")
-                fd.write(f"{depth_stamp} {depth_file}\n")
-            else:
-                fa.write(f"{t:.6f} {rgb_file} {t_depth:.6f} {depth_file}\n")
-                fr.write(f"{t:.6f} {rgb_file}\n")
-                fd.write(f"{t_depth:.6f} {depth_file}\n")
-            source_t = float(rgb_stamp)
-            p = bisect.bisect_left(truth_stamps, source_t)
-            near = min((q for q in (p - 1, p) if 0 <= q < len(truth_stamps)),
-                       key=lambda q: abs(truth_stamps[q] - source_t))
-            if abs(truth_stamps[near] - source_t) > 0.01:
-                without_truth += 1
-                continue
-            fg.write(f"{t:.6f} " + " ".join(truth[near][1:8]) + "\n")
+            if not args.keep_stamps:
+                t = t0 + k * interval
+                t_depth = t + (float(depth_stamp) - float(rgb_stamp))
+                source_t = float(rgb_stamp)
+                rgb_stamp, depth_stamp = f"{t:.6f}", f"{t_depth:.6f}"
+                p = bisect.bisect_left(truth_stamps, source_t)
+                near = min((q for q in (p - 1, p) if 0 <= q < len(truth_stamps)),
+                           key=lambda q: abs(truth_stamps[q] - source_t))
+                if abs(truth_stamps[near] - source_t) > 0.01:
+                    without_truth += 1
+                else:
+                    truth_lines.append(f"{rgb_stamp} " + " ".join(truth[near][1:8]) + "\n")
+            fa.write(f"{rgb_stamp} {rgb_file} {depth_stamp} {depth_file}\n")
+            fr.write(f"{rgb_stamp} {rgb_file}\n")
+            fd.write(f"{depth_stamp} {depth_file}\n")
+    if not args.keep_stamps:
+        with open(paths["groundtruth"], "w") as fg:
+            fg.write(f"# resampled from {os.path.abspath(args.source)} "
+                     f"with --pattern {args.pattern}\n")
+            fg.write("# timestamp tx ty tz qx qy qz qw\n")
+            fg.writelines(truth_lines)
     stamps = ("own stamps, the source's ground truth" if args.keep_stamps
               else f"stamped every {interval * 1000:.1f} ms, {without_truth} without ground truth")
     print(f"{args.out}: {len(chosen)} frames from {chosen[-1] + 1} source frames, {stamps}")

@@ -27,6 +27,20 @@ SE3 truth_in_map(std::size_t k) {
   return seq.T_w_c[0].inverse() * seq.T_w_c[k];
 }
 
+/// A tracker on an empty map of the room (no local mapping: the tests feed it frames by hand).
+std::unique_ptr<Tracker> room_tracker(const TrackerConfig& config) {
+  return std::make_unique<Tracker>(config, testing::test_camera(), std::make_shared<map::Map>(),
+                                   testing::room_vocabulary(),
+                                   std::make_shared<vocabulary::BowDatabase>());
+}
+
+/// The pose of tracking result `r` for room frame k is within 1 cm and 0.5 degrees of the truth.
+void expect_near_truth(const TrackingResult& r, std::size_t k) {
+  const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
+  EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
+  EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+}
+
 void expect_accurate(const SequenceRun& run, std::size_t count) {
   ASSERT_EQ(run.results.size(), count);
   EXPECT_EQ(run.results[0].method, TrackingMethod::kInitialization);
@@ -111,25 +125,18 @@ TEST(TrackerTest, MotionModelSpansDroppedFrames) {
   // Frames 0-14, then 21-39: the velocity is scaled to the seven intervals of the gap (ORB-SLAM2
   // would predict one interval's motion, miss the matches and fall back on the reference
   // keyframe), and back to one interval for frame 22; the motion prior widens across the gap.
-  auto map = std::make_shared<map::Map>();
   const TrackerConfig config = testing::test_tracker_config();
   ASSERT_TRUE(config.motion_prior.enabled);
-  Tracker tracker(config, testing::test_camera(), map, testing::room_vocabulary(),
-                  std::make_shared<vocabulary::BowDatabase>());
+  const std::unique_ptr<Tracker> tracker = room_tracker(config);
   const MappingStatus idle;
-  std::vector<std::size_t> fed;
   for (std::size_t k = 0; k < room_sequence().frames.size(); ++k) {
-    if (k < 15 || k > 20) fed.push_back(k);
-  }
-  for (const std::size_t k : fed) {
-    const TrackingResult r = tracker.track(room_sequence().frames[k], cv::Mat(), idle);
+    if (k >= 15 && k <= 20) continue;
+    const TrackingResult r = tracker->track(room_sequence().frames[k], cv::Mat(), idle);
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
     if (k == 21) {
       EXPECT_EQ(r.method, TrackingMethod::kMotionModel);
     }
-    const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
-    EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
-    EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+    expect_near_truth(r, k);
   }
 }
 
@@ -160,23 +167,19 @@ TEST(TrackerTest, NoMotionPriorAfterTheMotionModelFailed) {
   // prediction is far off, its search finds too few matches, and the reference keyframe tracks
   // the frame, without the prior the failed attempt had set.
   constexpr std::size_t kJump = 20;
-  auto map = std::make_shared<map::Map>();
-  Tracker tracker(testing::test_tracker_config(), testing::test_camera(), map,
-                  testing::room_vocabulary(), std::make_shared<vocabulary::BowDatabase>());
+  const std::unique_ptr<Tracker> tracker = room_tracker(testing::test_tracker_config());
   const MappingStatus idle;
   for (std::size_t k = 0; k <= 5; ++k) {
-    ASSERT_TRUE(tracker.track(room_sequence().frames[k], cv::Mat(), idle).tracked());
+    ASSERT_TRUE(tracker->track(room_sequence().frames[k], cv::Mat(), idle).tracked());
   }
   io::RgbdFrame jump = room_sequence().frames[kJump];
   jump.index = 6;
   jump.timestamp_s = room_sequence().frames[6].timestamp_s;
-  const TrackingResult r = tracker.track(std::move(jump), cv::Mat(), idle);
+  const TrackingResult r = tracker->track(std::move(jump), cv::Mat(), idle);
   ASSERT_TRUE(r.tracked());
   EXPECT_EQ(r.method, TrackingMethod::kReferenceKeyFrame);
   EXPECT_FALSE(r.motion_prior_used);
-  const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(kJump));
-  EXPECT_LT(e.translation_m, 0.01);
-  EXPECT_LT(e.rotation_deg, 0.5);
+  expect_near_truth(r, kJump);
 }
 
 TEST(TrackerTest, AbruptSpeedChangesAreTrackedDespiteTheMotionPrior) {
@@ -184,11 +187,9 @@ TEST(TrackerTest, AbruptSpeedChangesAreTrackedDespiteTheMotionPrior) {
   // camera triples its speed within one interval and drops back (no timestamp gap tells). The
   // constant-velocity prediction, and with it the prior, is then off by two intervals' motion; the
   // matches must outweigh the prior (docs/tracking.md, "Abrupt speed changes").
-  auto map = std::make_shared<map::Map>();
   const TrackerConfig config = testing::test_tracker_config();
   ASSERT_TRUE(config.motion_prior.enabled);
-  Tracker tracker(config, testing::test_camera(), map, testing::room_vocabulary(),
-                  std::make_shared<vocabulary::BowDatabase>());
+  const std::unique_ptr<Tracker> tracker = room_tracker(config);
   const MappingStatus idle;
   std::vector<std::size_t> fed;
   for (std::size_t k = 0; k < room_sequence().frames.size(); k += (k >= 15 && k < 30) ? 3 : 1) {
@@ -200,7 +201,7 @@ TEST(TrackerTest, AbruptSpeedChangesAreTrackedDespiteTheMotionPrior) {
     io::RgbdFrame frame = room_sequence().frames[k];
     frame.index = i;
     frame.timestamp_s = t0 + static_cast<double>(i) / 30.0;
-    const TrackingResult r = tracker.track(std::move(frame), cv::Mat(), idle);
+    const TrackingResult r = tracker->track(std::move(frame), cv::Mat(), idle);
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
     if (i > 1) {
       EXPECT_EQ(r.method, TrackingMethod::kMotionModel) << "frame " << k;
@@ -208,9 +209,7 @@ TEST(TrackerTest, AbruptSpeedChangesAreTrackedDespiteTheMotionPrior) {
     // Measured: at most 4.1 mm and 0.10 degrees (frame 27, in the fast stretch; 2.3 mm and
     // 0.05 degrees without the prior). A prior five times as tight (1 mm, 0.2 degrees) is off by
     // 14-17 cm from frame 27 on.
-    const testing::PoseError e = pose_error(*r.T_w_c, truth_in_map(k));
-    EXPECT_LT(e.translation_m, 0.01) << "frame " << k;
-    EXPECT_LT(e.rotation_deg, 0.5) << "frame " << k;
+    expect_near_truth(r, k);
   }
 }
 

@@ -272,7 +272,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     if (result.state == tracking::TrackingState::kLost) ++stats_.frames_lost;
   }
   if (result.state == tracking::TrackingState::kRelocalized) ++stats_.relocalizations;
-  if (result.tracked() && result.motion_prior_used) ++stats_.frames_with_motion_prior;
+  if (result.motion_prior_used) ++stats_.frames_with_motion_prior;
   if (result.map_reset) {
     ++stats_.map_resets;
     // The map was cleared: nothing downstream may keep using the old keyframes. Local mapping

@@ -239,7 +239,6 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     stage.reset();
     ok = track_local_map(frame, result.timings);
     result.timings.local_map_ms = stage.elapsed_ms();
-    result.motion_prior_used = motion_prior_.has_value();
   }
 
   if (!ok) {
@@ -261,6 +260,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
   if (was_lost) spdlog::info("relocalized at frame {}", result.frame_index);
   state_ = state;
   result.state = state;
+  result.motion_prior_used = motion_prior_.has_value();
   if (last_frame_tracked_ && last_frame_.has_pose()) {
     motion_model_.update(frame.T_c_w(), last_frame_.T_c_w(),
                          frame.timestamp_s() - last_frame_.timestamp_s());

@@ -73,8 +73,8 @@ struct TrackingResult {
   map::KeyFramePtr reference_keyframe;  // keyframe the pose is stored relative to
   bool map_reset = false;  // tracking was lost with too few keyframes and cleared the map and the
                            // keyframe database: local mapping / loop closing must reset too
-  bool motion_prior_used = false;  // the motion model's prediction was a prior of the pose
-                                   // (tracking.motion_prior; motion-model tracking only)
+  bool motion_prior_used = false;  // tracked, with the motion model's prediction as a prior of
+                                   // the pose (tracking.motion_prior; motion-model tracking only)
   TrackingTimings timings;
   std::vector<KeypointStatus> keypoints;  // every keypoint tracking used (outside the dynamic
                                           // masks), in the frame's order
