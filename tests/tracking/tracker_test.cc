@@ -407,6 +407,61 @@ TEST(TrackerTest, RelocalizesAfterBlankFrames) {
   EXPECT_EQ(tracker.camera_trajectory().size(), tracked + 2);
 }
 
+// The camera pans 87 degrees and jumps back to where it started (a gap in the frames, the view
+// swept back): the motion model predicts further panning and the reference keyframe, made near
+// the end of the pan, shares too little of the view, so tracking fails. Relocalization finds the
+// first keyframes in that same frame; ORB-SLAM2 (same_frame: false) loses the frame and
+// relocalizes the next one.
+TEST(TrackerTest, AFrameWhoseTrackingFailsIsRelocalizedAtOnce) {
+  const camera::PinholeCamera camera = testing::test_camera();
+  const auto pan = [](double yaw_deg) {
+    return SE3(so3_exp(Vec3d(0.0, yaw_deg * M_PI / 180.0, 0.0)), Vec3d(0.0, 0.0, 0.0));
+  };
+  const std::size_t panned = 30;  // frames 0..29 at 0, 3, ..., 87 degrees
+  const SE3 T_w_c_jump = pan(3.0) * SE3(Mat3d::Identity(), Vec3d(0.02, 0.0, 0.0));
+  const SE3 T_w_c_next = pan(4.0) * SE3(Mat3d::Identity(), Vec3d(0.02, 0.0, 0.0));
+  const MappingStatus idle;
+  for (const bool same_frame : {false, true}) {
+    SCOPED_TRACE(same_frame ? "same_frame: true" : "same_frame: false");
+    TrackerConfig config = testing::test_tracker_config();
+    config.relocalization.same_frame = same_frame;
+    config.reset_when_lost_max_keyframes = -1;  // a lost frame must not reset the small map
+    auto map = std::make_shared<map::Map>();
+    auto database = std::make_shared<vocabulary::BowDatabase>();
+    Tracker tracker(config, camera, map, testing::room_vocabulary(), database);
+    double stamp = 1000.0;
+    for (std::size_t k = 0; k < panned; ++k, stamp += 1.0 / 30) {
+      const TrackingResult r = tracker.track(
+          testing::room().render(camera, pan(3.0 * k), k, stamp, 1.0), cv::Mat(), idle);
+      ASSERT_TRUE(r.tracked()) << "frame " << k;
+      if (r.new_keyframe) associate_keyframe(r.new_keyframe, *database);
+    }
+    const TrackingResult jump = tracker.track(
+        testing::room().render(camera, T_w_c_jump, panned, stamp, 1.0), cv::Mat(), idle);
+    const TrackingResult next =
+        tracker.track(testing::room().render(camera, T_w_c_next, panned + 1, stamp + 1.0 / 30, 1.0),
+                      cv::Mat(), idle);
+    if (!same_frame) {
+      EXPECT_EQ(jump.state, TrackingState::kLost);
+      ASSERT_EQ(next.state, TrackingState::kRelocalized);
+      EXPECT_EQ(tracker.camera_trajectory().size(), panned + 1);
+    } else {
+      ASSERT_EQ(jump.state, TrackingState::kRelocalized);
+      EXPECT_EQ(jump.method, TrackingMethod::kRelocalization);
+      EXPECT_FALSE(jump.motion_prior_used);
+      ASSERT_TRUE(jump.T_w_c.has_value());
+      const testing::PoseError e = pose_error(*jump.T_w_c, T_w_c_jump);
+      EXPECT_LT(e.translation_m, 0.01);
+      EXPECT_LT(e.rotation_deg, 0.5);
+      EXPECT_GE(jump.num_inliers, 50);
+      ASSERT_TRUE(next.tracked());
+      EXPECT_EQ(tracker.camera_trajectory().size(), panned + 2);
+    }
+    ASSERT_TRUE(next.T_w_c.has_value());
+    EXPECT_LT(pose_error(*next.T_w_c, T_w_c_next).translation_m, 0.01);
+  }
+}
+
 TEST(TrackerTest, ResetsWhenLostWithATinyMap) {
   auto map = std::make_shared<map::Map>();
   auto database = std::make_shared<vocabulary::BowDatabase>();

@@ -254,7 +254,11 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     ++stats_.frames_tracked;
     const SE3 T_c_w = result.T_w_c->inverse();
     const std::optional<SE3> previous = previous_pose(frame_changes);
-    velocity_ = previous ? std::optional<SE3>(T_c_w * previous->inverse()) : std::nullopt;
+    // A relocalized frame may have jumped from the previous one (tracking failed on it and it
+    // relocalized at once, tracking.relocalization.same_frame): no velocity across that.
+    const bool relocalized = result.state == tracking::TrackingState::kRelocalized;
+    velocity_ =
+        previous && !relocalized ? std::optional<SE3>(T_c_w * previous->inverse()) : std::nullopt;
     last_T_c_w_ = T_c_w;
     last_pose_frame_changes_ = frame_changes;
     last_reference_ = result.reference_keyframe;

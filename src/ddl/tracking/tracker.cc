@@ -240,6 +240,31 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     ok = track_local_map(frame, result.timings);
     result.timings.local_map_ms = stage.elapsed_ms();
   }
+  bool relocalized_at_once = false;
+  if (!ok && !was_lost && config_.relocalization.same_frame) {
+    // Tracking failed on this frame (a jump after dropped frames, the view swept away): the
+    // frame tries relocalization itself instead of being lost, as ORB-SLAM2 leaves it to the next
+    // frame. Nothing of the failed attempt is kept: its matches, its rejected points and a
+    // motion prior whose prediction did not hold.
+    motion_prior_.reset();
+    frame.clear_map_points();
+    frame.clear_rejected_points();
+    stage.reset();
+    relocalized_at_once = relocalize(frame);
+    result.timings.initial_pose_ms += stage.elapsed_ms();
+    if (relocalized_at_once) {
+      result.method = TrackingMethod::kRelocalization;
+      frame.set_reference_keyframe(reference_keyframe_);
+      stage.reset();
+      TrackingTimings local_map_timings;
+      relocalized_at_once = track_local_map(frame, local_map_timings);
+      result.timings.local_map_ms += stage.elapsed_ms();
+      result.timings.local_map_update_ms += local_map_timings.local_map_update_ms;
+      result.timings.local_map_search_ms += local_map_timings.local_map_search_ms;
+      result.timings.local_map_pose_ms += local_map_timings.local_map_pose_ms;
+    }
+    ok = relocalized_at_once;
+  }
 
   if (!ok) {
     state_ = TrackingState::kLost;
@@ -256,12 +281,18 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     return;
   }
 
-  const TrackingState state = was_lost ? TrackingState::kRelocalized : TrackingState::kOk;
+  const bool relocalized = was_lost || relocalized_at_once;
+  const TrackingState state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
   if (was_lost) spdlog::info("relocalized at frame {}", result.frame_index);
+  if (relocalized_at_once) {
+    spdlog::info("tracking failed at frame {}, relocalized in the same frame", result.frame_index);
+  }
   state_ = state;
   result.state = state;
   result.motion_prior_used = motion_prior_.has_value();
-  if (last_frame_tracked_ && last_frame_.has_pose()) {
+  // A relocalized frame's motion from the last frame is a jump, not a velocity (and the model is
+  // not used on the next frame anyway).
+  if (last_frame_tracked_ && last_frame_.has_pose() && !relocalized_at_once) {
     motion_model_.update(frame.T_c_w(), last_frame_.T_c_w(),
                          frame.timestamp_s() - last_frame_.timestamp_s());
   } else {

@@ -58,6 +58,8 @@ struct KeyFrameConfig {
 
 /// Relocalization (ORB-SLAM2 Tracking::Relocalization).
 struct RelocalizationConfig {
+  bool same_frame = true;               // a frame whose tracking fails tries relocalization at
+                                        // once (false: from the next frame on, as ORB-SLAM2)
   float bow_ratio = 0.75f;              // Lowe ratio for BoW matching against each candidate
   int min_bow_matches = 15;             // candidates with fewer BoW matches are skipped
   float min_common_words_ratio = 0.8f;  // candidates share >= this * the best's shared words
