@@ -119,6 +119,47 @@ TEST(MotionModelTest, RepeatsTheLastRelativeMotion) {
   EXPECT_FALSE(model.valid());
 }
 
+TEST(MotionModelTest, AVelocityLearntOverAGlitchedStampRepeatsOncePerFrame) {
+  const SE3 step(so3_exp(Vec3d(0.0, 0.02, 0.0)), Vec3d(0.01, 0.0, -0.02));
+  SE3 T;
+  MotionModel model;
+  // A 30 Hz camera that drops every other frame now and then: the base interval stays 33 ms.
+  for (const double interval : {0.033, 0.066, 0.033, 0.066, 0.066}) {
+    model.update(step * T, T, interval);
+    T = step * T;
+  }
+  EXPECT_EQ(model.base_interval_s(), 0.066);  // only two intervals of 33 ms so far
+  model.update(step * T, T, 0.033);           // twice as short as the base: a frame not dropped
+  EXPECT_EQ(model.base_interval_s(), 0.033);
+  EXPECT_EQ(model.interval_s(), 0.033);
+  // The next frame is stamped 1 ms after the last one, but the camera moved one interval's step.
+  const SE3 T_glitch = step * T;
+  model.update(T_glitch, T, 0.001);
+  EXPECT_EQ(model.interval_s(), 0.0) << "the glitched interval counts as unknown";
+  // The frame after it comes 65 ms after the glitched stamp: one step, not 65.
+  const SE3 predicted = model.predict(T_glitch, 0.065);
+  EXPECT_LT((predicted.matrix() - (step * T_glitch).matrix()).norm(), 1e-12);
+  // One glitch does not lower the base interval; a 33 ms interval is still one.
+  EXPECT_EQ(model.base_interval_s(), 0.033);
+  model.update(step * T, T, 0.033);
+  EXPECT_EQ(model.interval_s(), 0.033);
+  // Without a history of intervals a short one cannot be judged, and it is kept.
+  MotionModel fresh;
+  fresh.update(T_glitch, T, 0.001);
+  EXPECT_EQ(fresh.interval_s(), 0.001);
+  // reset() keeps the camera's rate. A camera that turns to 60 Hz is no glitch (twice as fast)
+  // and establishes its rate after three frames; 8 ms against 33 ms is one.
+  model.reset();
+  EXPECT_EQ(model.base_interval_s(), 0.033);
+  model.update(step * T, T, 0.008);
+  EXPECT_EQ(model.interval_s(), 0.0);
+  for (int k = 0; k < 3; ++k) {
+    model.update(step * T, T, 0.0167);
+    EXPECT_EQ(model.interval_s(), 0.0167);
+  }
+  EXPECT_EQ(model.base_interval_s(), 0.0167);
+}
+
 TEST(MotionModelTest, PriorWidensAcrossAGap) {
   MotionModel model;
   model.update(SE3(), SE3(), 0.033);

@@ -83,6 +83,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"poses", s.poses},
           {"frames_lost", s.frames_lost},
           {"relocalizations", s.relocalizations},
+          {"relocalizations_in_same_frame", s.relocalizations_in_same_frame},
           {"frames_with_motion_prior", s.frames_with_motion_prior},
           {"keyframes_created", s.keyframes_created},
           {"keyframes", s.keyframes},

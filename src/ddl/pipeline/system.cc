@@ -248,6 +248,17 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   timings_.record("tracking.initial_pose", result.timings.initial_pose_ms);
   timings_.record("tracking.local_map", result.timings.local_map_ms);
   timings_.record("tracking.keyframe", result.timings.keyframe_ms);
+  if (result.relocalized_at_once) {
+    ++stats_.relocalizations_in_same_frame;
+    if (dynamic_->enabled()) {
+      // The geometry check and the memory looked at the prediction that failed (the low-cost
+      // pose failed, so constant_velocity_pose()): their masks belong to another pose. The
+      // frame's keyframe and the dense map get the CNN mask only (review, stop 29).
+      masks.geometry.release();
+      masks.memory.release();
+      dynamic_->finish_masks(masks, cnn_exclusion, cv::Mat());
+    }
+  }
 
   ++stats_.frames;
   if (result.tracked()) {

@@ -62,7 +62,8 @@ struct SystemStatistics {
   std::size_t poses = 0;           // poses in the camera trajectory at the end
   std::size_t frames_lost = 0;
   std::size_t relocalizations = 0;
-  std::size_t frames_with_motion_prior = 0;  // tracked with the motion model's prior
+  std::size_t relocalizations_in_same_frame = 0;  // of them: the frame whose tracking failed
+  std::size_t frames_with_motion_prior = 0;       // tracked with the motion model's prior
   std::size_t keyframes_created = 0;
   std::size_t keyframes = 0;   // alive in the map at the end
   std::size_t map_points = 0;  // alive in the map at the end

@@ -2,8 +2,29 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace ddl::tracking {
+
+void MotionModel::update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s) {
+  velocity_ = T_c_w_current * T_c_w_previous.inverse();
+  const double base_s = base_interval_s();
+  const bool glitch = interval_s > 0.0 && base_s > 0.0 && interval_s * kGlitchRatio <= base_s;
+  interval_s_ = glitch ? 0.0 : interval_s;
+  valid_ = true;
+  if (interval_s > 0.0) {
+    recent_intervals_s_.push_back(interval_s);
+    if (recent_intervals_s_.size() > kRateHistory) recent_intervals_s_.pop_front();
+  }
+}
+
+double MotionModel::base_interval_s() const {
+  if (recent_intervals_s_.size() < kMinRateHistory) return 0.0;
+  std::vector<double> sorted(recent_intervals_s_.begin(), recent_intervals_s_.end());
+  const auto nth = sorted.begin() + static_cast<std::ptrdiff_t>(kMinRateHistory - 1);
+  std::nth_element(sorted.begin(), nth, sorted.end());
+  return *nth;
+}
 
 double MotionModel::gap_ratio(double elapsed_s) const {
   if (!(interval_s_ > 0.0) || !(elapsed_s > 0.0)) return 1.0;

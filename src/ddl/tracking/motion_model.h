@@ -6,6 +6,14 @@
 // Unlike ORB-SLAM2 it knows the time V was learnt over: across a gap (dropped frames, or a
 // velocity learnt across one) the motion is scaled to the time that passed, V^(elapsed/learnt).
 // Within kGapRatio of the learnt interval (a regular camera's timestamp jitter) V repeats as is.
+// A velocity learnt over an interval kGlitchRatio or more times shorter than the camera's base
+// interval (the kMinRateHistory-th smallest of the last kRateHistory intervals) has a stamp that
+// cannot be trusted: a glitch, or a frame delivered twice (no camera delivers frames four times
+// faster than its rate). Its interval counts as unknown, so V repeats once per frame instead of
+// being stretched over the next interval (a 1 ms stamp would stretch it 33-fold at 30 Hz).
+
+#include <cstddef>
+#include <deque>
 
 #include "ddl/core/se3.h"
 #include "ddl/optimization/pose_optimization.h"
@@ -17,16 +25,23 @@ class MotionModel {
  public:
   /// Intervals that differ by this factor or more are a gap, not jitter.
   static constexpr double kGapRatio = 1.5;
+  /// An interval this many times shorter than the base interval is a timestamp glitch.
+  static constexpr double kGlitchRatio = 4.0;
+  /// The base interval is the kMinRateHistory-th smallest of the last kRateHistory intervals:
+  /// one or two glitches do not lower it, dropped frames (longer intervals) do not raise it, and
+  /// a camera that turns faster establishes its new rate after kMinRateHistory frames.
+  static constexpr std::size_t kRateHistory = 15;
+  static constexpr std::size_t kMinRateHistory = 3;
 
   bool valid() const { return valid_; }
   void reset() { valid_ = false; }
   /// Learns V from the pose of the frame just tracked and the pose of the one before it, taken
-  /// interval_s apart (0: unknown).
-  void update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s = 0.0) {
-    velocity_ = T_c_w_current * T_c_w_previous.inverse();
-    interval_s_ = interval_s;
-    valid_ = true;
-  }
+  /// interval_s apart (0: unknown; a glitch, see above, counts as unknown).
+  void update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s = 0.0);
+  /// The camera's base frame interval from the recent intervals given to update() (see
+  /// kRateHistory; 0 while fewer than kMinRateHistory). reset() keeps them: they describe the
+  /// camera, not its motion.
+  double base_interval_s() const;
   /// elapsed_s / interval_s() when that is a gap (see kGapRatio), else 1 (also when either time
   /// is unknown or not positive).
   double gap_ratio(double elapsed_s) const;
@@ -47,6 +62,7 @@ class MotionModel {
  private:
   SE3 velocity_;
   double interval_s_ = 0.0;
+  std::deque<double> recent_intervals_s_;  // positive intervals given to update(), newest last
   bool valid_ = false;
 };
 

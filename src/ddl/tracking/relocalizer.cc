@@ -1,5 +1,7 @@
 #include "ddl/tracking/relocalizer.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <map>
 #include <opencv2/calib3d.hpp>
@@ -136,11 +138,22 @@ RelocalizationResult Relocalizer::relocalize(Frame& frame, FrameMatcher& matcher
     frame.clear_map_points();
     frame.clear_rejected_points();
     const int bow_matches = matcher.match_bow(*kf, frame, config_.bow_ratio, matches_);
-    if (bow_matches < config_.min_bow_matches) continue;
-    if (!solve_pnp(frame, matches_)) continue;
+    if (bow_matches < config_.min_bow_matches) {
+      spdlog::debug("relocalization: candidate keyframe {}: {} BoW matches", kf->id(), bow_matches);
+      continue;
+    }
+    if (!solve_pnp(frame, matches_)) {
+      spdlog::debug("relocalization: candidate keyframe {}: {} BoW matches, PnP failed", kf->id(),
+                    bow_matches);
+      continue;
+    }
 
     int good = estimator.optimize(frame);
-    if (good < config_.pnp_min_inliers) continue;
+    if (good < config_.pnp_min_inliers) {
+      spdlog::debug("relocalization: candidate keyframe {}: {} BoW matches, {} PnP inliers kept",
+                    kf->id(), bow_matches, good);
+      continue;
+    }
     discard_outliers(frame);
 
     if (good < config_.min_inliers) {
@@ -162,6 +175,8 @@ RelocalizationResult Relocalizer::relocalize(Frame& frame, FrameMatcher& matcher
         discard_outliers(frame);
       }
     }
+    spdlog::debug("relocalization: candidate keyframe {}: {} BoW matches, {} inliers", kf->id(),
+                  bow_matches, good);
     if (good >= config_.min_inliers) {
       // Outliers of this search are not excluded from the local-map search that follows.
       frame.clear_rejected_points();

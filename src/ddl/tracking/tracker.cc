@@ -287,12 +287,13 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
   if (relocalized_at_once) {
     spdlog::info("tracking failed at frame {}, relocalized in the same frame", result.frame_index);
   }
+  result.relocalized_at_once = relocalized_at_once;
   state_ = state;
   result.state = state;
   result.motion_prior_used = motion_prior_.has_value();
-  // A relocalized frame's motion from the last frame is a jump, not a velocity (and the model is
-  // not used on the next frame anyway).
-  if (last_frame_tracked_ && last_frame_.has_pose() && !relocalized_at_once) {
+  // After a relocalization in the same frame this learns the jump, but the model is not used on
+  // the next frame (no motion model within 2 frames of a relocalization), which replaces it.
+  if (last_frame_tracked_ && last_frame_.has_pose()) {
     motion_model_.update(frame.T_c_w(), last_frame_.T_c_w(),
                          frame.timestamp_s() - last_frame_.timestamp_s());
   } else {
@@ -493,6 +494,9 @@ void Tracker::reset(TrackingResult& result) {
   local_map_.clear();
   motion_model_.reset();
   reference_keyframe_.reset();
+  // A relocalization of the old map (one whose local map then failed) must not hold the new
+  // map to the stricter inlier count after a relocalization (review, stop 29).
+  last_relocalization_frame_id_ = 0;
   trajectory_.clear();
   last_frame_tracked_ = false;
   state_ = TrackingState::kNotInitialized;

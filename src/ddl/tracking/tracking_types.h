@@ -24,7 +24,8 @@ enum class TrackingState {
   kNotInitialized,  // no map yet (first frames, or after a reset)
   kOk,              // tracked against the map
   kLost,            // tracking failed; the next frames try to relocalize
-  kRelocalized,     // tracked again after being lost (this frame)
+  kRelocalized,     // tracked by relocalization: after being lost, or in the frame whose tracking
+                    // failed (TrackingResult::relocalized_at_once)
 };
 
 std::string_view to_string(TrackingState state);
@@ -73,8 +74,11 @@ struct TrackingResult {
   map::KeyFramePtr reference_keyframe;  // keyframe the pose is stored relative to
   bool map_reset = false;  // tracking was lost with too few keyframes and cleared the map and the
                            // keyframe database: local mapping / loop closing must reset too
-  bool motion_prior_used = false;  // tracked, with the motion model's prediction as a prior of
-                                   // the pose (tracking.motion_prior; motion-model tracking only)
+  bool motion_prior_used = false;    // tracked, with the motion model's prediction as a prior of
+                                     // the pose (tracking.motion_prior; motion-model tracking only)
+  bool relocalized_at_once = false;  // kRelocalized in the frame whose tracking failed
+                                     // (tracking.relocalization.same_frame): it may have jumped
+                                     // from the last frame, and a pose predicted from that is wrong
   TrackingTimings timings;
   std::vector<KeypointStatus> keypoints;  // every keypoint tracking used (outside the dynamic
                                           // masks), in the frame's order
