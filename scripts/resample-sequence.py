@@ -15,9 +15,15 @@ the source RGB stamp (within 10 ms; frames without one get none, as in TUM's own
 With --keep-stamps the frames keep their own stamps instead (and groundtruth.txt is the source's,
 linked): --pattern 1x2 gives every second frame, a 15 Hz stream from a 30 Hz one.
 
+With --glitch-every N every Nth frame is stamped 1 ms after the frame before it (its depth stamp
+moves with it), as a camera driver's timestamp glitch would: the image is still the one taken a
+whole interval later. With --keep-stamps its ground truth is then looked up at the wrong stamp
+too, which both runs of a comparison share.
+
 Usage:
   scripts/resample-sequence.py SOURCE_DIR OUT_DIR --pattern 40x1,20x3
   scripts/resample-sequence.py SOURCE_DIR OUT_DIR --pattern 1x3 --keep-stamps
+  scripts/resample-sequence.py SOURCE_DIR OUT_DIR --pattern 1x1 --keep-stamps --glitch-every 50
 The source needs associations.txt (ddl_slam synth writes one; for a TUM download, TUM's
 associate.py rgb.txt depth.txt > associations.txt) and groundtruth.txt. Standard library only.
 """
@@ -76,7 +82,12 @@ def main():
     parser.add_argument("--pattern", required=True, help="segments COUNTxSTEP, e.g. 40x1,20x3")
     parser.add_argument("--keep-stamps", action="store_true",
                         help="keep each frame's own stamps (a lower frame rate, not a jerk)")
+    parser.add_argument("--glitch-every", type=int, default=0, metavar="N",
+                        help="stamp every Nth frame 1 ms after the one before (0: none)")
     args = parser.parse_args()
+    if args.glitch_every < 0 or args.glitch_every == 1:
+        fail("--glitch-every: N must be 0 (none) or at least 2 (the first frame has no "
+             "frame before it)")
     segments = parse_pattern(args.pattern)
 
     assoc = read_rows(os.path.join(args.source, "associations.txt"), 4)
@@ -118,13 +129,19 @@ def main():
             open(paths["depth"], "w") as fd:
         fr.write("# timestamp filename\n")
         fd.write("# timestamp filename\n")
+        previous_t = None
+        glitches = 0
         for k, j in enumerate(chosen):
             rgb_stamp, rgb_file, depth_stamp, depth_file = assoc[j][:4]
-            if not args.keep_stamps:
-                t = t0 + k * interval
+            t = t0 + k * interval if not args.keep_stamps else float(rgb_stamp)
+            if args.glitch_every and k % args.glitch_every == args.glitch_every - 1:
+                t = previous_t + 0.001
+                glitches += 1
+            source_t = float(rgb_stamp)
+            if not args.keep_stamps or t != source_t:
                 t_depth = t + (float(depth_stamp) - float(rgb_stamp))
-                source_t = float(rgb_stamp)
                 rgb_stamp, depth_stamp = f"{t:.6f}", f"{t_depth:.6f}"
+            if not args.keep_stamps:
                 p = bisect.bisect_left(truth_stamps, source_t)
                 near = min((q for q in (p - 1, p) if 0 <= q < len(truth_stamps)),
                            key=lambda q: abs(truth_stamps[q] - source_t))
@@ -132,6 +149,7 @@ def main():
                     without_truth += 1
                 else:
                     truth_lines.append(f"{rgb_stamp} " + " ".join(truth[near][1:8]) + "\n")
+            previous_t = float(rgb_stamp)
             fa.write(f"{rgb_stamp} {rgb_file} {depth_stamp} {depth_file}\n")
             fr.write(f"{rgb_stamp} {rgb_file}\n")
             fd.write(f"{depth_stamp} {depth_file}\n")
@@ -143,6 +161,8 @@ def main():
             fg.writelines(truth_lines)
     stamps = ("own stamps, the source's ground truth" if args.keep_stamps
               else f"stamped every {interval * 1000:.1f} ms, {without_truth} without ground truth")
+    if args.glitch_every:
+        stamps += f", {glitches} stamped 1 ms after the frame before"
     print(f"{args.out}: {len(chosen)} frames from {chosen[-1] + 1} source frames, {stamps}")
 
 
