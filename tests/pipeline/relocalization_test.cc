@@ -132,5 +132,52 @@ TEST(Relocalization, AMapResetRestartsTheDenseMapToo) {
   EXPECT_EQ(system.dense_mapper().octree()->stats().scans_integrated, keyframes_after_reset);
 }
 
+// The camera jumps from frame 100 of syn_static_rpy back to the view of frame 5, 53 degrees away:
+// tracking and the low-cost pose fail on that frame, and it is relocalized at once
+// (tracking.relocalization.same_frame). With dynamic removal on (geometry check only), the
+// geometry check ran at the constant-velocity prediction that failed; its mask must not reach the
+// frame's outcome, the keyframe or the dense map (review, stop 29).
+TEST(Relocalization, AFrameRelocalizedAtOnceKeepsNoMaskOfTheFailedPrediction) {
+  const auto vocabulary = default_vocabulary();
+  if (!vocabulary) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  constexpr std::size_t kJumpFrom = 100;
+  constexpr std::size_t kJumpTo = 5;
+  const auto source =
+      synthetic::make_sequence_source(testing::preset_config("syn_static_rpy", kJumpFrom + 1));
+  const camera::PinholeCamera& camera = source->camera();
+  SystemConfig config = core_config();
+  config.dynamic.enabled = true;
+  config.dynamic.segmentation.backend = segmentation::Backend::kNone;  // geometry check alone
+  ASSERT_TRUE(config.dynamic.use_geometry);
+  ASSERT_TRUE(config.tracking.relocalization.same_frame);
+  System system(config, camera, vocabulary);
+  double stamp = 0.0;
+  for (std::size_t i = 0; i <= kJumpFrom; ++i) {
+    const io::RgbdFrame frame = testing::to_rgbd(source->render_frame(i), camera);
+    stamp = frame.timestamp_s;
+    ASSERT_TRUE(system.process(frame).tracking.tracked()) << "frame " << i;
+  }
+  const synthetic::FrameData back = source->render_frame(kJumpTo);
+  io::RgbdFrame jump = testing::to_rgbd(back, camera);
+  jump.index = kJumpFrom + 1;
+  jump.timestamp_s = stamp + 1.0 / camera.fps;
+  const FrameOutcome outcome = system.process(jump);
+  ASSERT_EQ(outcome.tracking.state, tracking::TrackingState::kRelocalized);
+  EXPECT_TRUE(outcome.tracking.relocalized_at_once);
+  EXPECT_EQ(system.statistics().relocalizations_in_same_frame, 1u);
+  EXPECT_EQ(system.statistics().frames_lost, 0u);
+  // The geometry check ran (at the failed prediction) and its mask was discarded.
+  EXPECT_GT(outcome.masks.geometry_stats.points_tested, 0);
+  EXPECT_TRUE(outcome.masks.geometry.empty());
+  EXPECT_TRUE(outcome.masks.combined.empty() || cv::countNonZero(outcome.masks.combined) == 0);
+  // The pose: frame 5's, in the map's world (frame 0's camera).
+  const SE3 T_c0_w = source->render_frame(0).T_w_c.inverse();
+  ASSERT_TRUE(outcome.tracking.T_w_c.has_value());
+  const testing::PoseError e = testing::pose_error(*outcome.tracking.T_w_c, T_c0_w * back.T_w_c);
+  EXPECT_LT(e.translation_m, 0.02);
+  EXPECT_LT(e.rotation_deg, 1.0);
+  system.finish();
+}
+
 }  // namespace
 }  // namespace ddl::pipeline
