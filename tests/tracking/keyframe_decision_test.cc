@@ -89,10 +89,22 @@ TEST(KeyFrameDecisionTest, NoKeyframeRightAfterRelocalizationInABigMap) {
   KeyFrameContext c = healthy_context();
   c.inliers = 100;
   c.keyframes_in_map = 40;
-  c.last_relocalization_frame_id = 90;
-  EXPECT_FALSE(need_new_keyframe(KeyFrameConfig{}, c));
+  c.last_relocalization_frame_id = 96;  // 4 frames ago
+  const KeyFrameConfig config;
+  ASSERT_EQ(config.frames_after_relocalization, 5);
+  EXPECT_FALSE(need_new_keyframe(config, c));
   c.keyframes_in_map = 30;  // small map: allowed
-  EXPECT_TRUE(need_new_keyframe(KeyFrameConfig{}, c));
+  EXPECT_TRUE(need_new_keyframe(config, c));
+  c.keyframes_in_map = 40;
+  c.last_relocalization_frame_id = 95;  // 5 frames ago: the map may grow again
+  EXPECT_TRUE(need_new_keyframe(config, c));
+  // ORB-SLAM2 holds the map for max_frames (30) frames.
+  KeyFrameConfig orb_slam2;
+  orb_slam2.frames_after_relocalization = orb_slam2.max_frames;
+  c.last_relocalization_frame_id = 75;
+  EXPECT_FALSE(need_new_keyframe(orb_slam2, c));
+  c.last_relocalization_frame_id = 70;
+  EXPECT_TRUE(need_new_keyframe(orb_slam2, c));
 }
 
 TEST(MotionModelTest, RepeatsTheLastRelativeMotion) {

@@ -35,6 +35,9 @@ TEST(TrackerConfigTest, ErrorsNameTheKey) {
   c.keyframes.max_frames = -1;
   EXPECT_TRUE(rejects(c, "tracking.keyframes.max_frames"));
   c = TrackerConfig{};
+  c.keyframes.frames_after_relocalization = -1;
+  EXPECT_TRUE(rejects(c, "tracking.keyframes.frames_after_relocalization"));
+  c = TrackerConfig{};
   c.relocalization.retry_inliers = 60;
   EXPECT_TRUE(rejects(c, "tracking.relocalization.retry_inliers"));
   c = TrackerConfig{};

@@ -24,7 +24,8 @@ bool need_new_keyframe(const KeyFrameConfig& config, const KeyFrameContext& c) {
   const auto max_frames = static_cast<FrameId>(config.max_frames);
   const auto min_frames = static_cast<FrameId>(config.min_frames);
   // Shortly after a relocalization the map is not extended (unless it is still tiny).
-  if (c.frame_id < c.last_relocalization_frame_id + max_frames &&
+  const auto after_relocalization = static_cast<FrameId>(config.frames_after_relocalization);
+  if (c.frame_id < c.last_relocalization_frame_id + after_relocalization &&
       c.keyframes_in_map > static_cast<std::size_t>(config.max_frames)) {
     return false;
   }

@@ -62,6 +62,7 @@ void validate_matching(const MatchingConfig& c) {
 void validate_keyframes(const KeyFrameConfig& c) {
   const std::string p = "tracking.keyframes.";
   require_count(c.min_frames, 0, 100000, p + "min_frames");
+  require_count(c.frames_after_relocalization, 0, 100000, p + "frames_after_relocalization");
   require(c.max_frames >= c.min_frames && c.max_frames <= 100000, p + "max_frames", c.max_frames,
           "must be in tracking.keyframes.min_frames..100000");
   require_count(c.tracked_close_max, 0, 100000, p + "tracked_close_max");

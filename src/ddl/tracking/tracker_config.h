@@ -43,8 +43,11 @@ struct KeyFrameConfig {
   int min_frames = 0;   // a keyframe may follow the last one after this many frames if mapping
                         // is idle
   int max_frames = 30;  // ... and is inserted after this many frames at the latest (= fps)
-  int tracked_close_max = 100;     // "need close points": fewer tracked close points than this
-  int non_tracked_close_min = 70;  // ... and more untracked close points than this
+  int frames_after_relocalization = 5;  // no keyframe this many frames after a relocalization
+                                        // once the map has more than max_frames keyframes
+                                        // (ORB-SLAM2: max_frames, 30)
+  int tracked_close_max = 100;          // "need close points": fewer tracked close points than this
+  int non_tracked_close_min = 70;       // ... and more untracked close points than this
   bool close_needs_two_keyframes = true;  // tracked close points count only when seen by >= 2
                                           // keyframes (ORB-SLAM2: false, fresh ones count too)
   float reference_ratio = 0.75f;          // inliers below this fraction of the reference's points
