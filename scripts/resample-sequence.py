@@ -129,17 +129,22 @@ def main():
             open(paths["depth"], "w") as fd:
         fr.write("# timestamp filename\n")
         fd.write("# timestamp filename\n")
-        previous_t = None
+        previous_t = previous_t_depth = None
         glitches = 0
         for k, j in enumerate(chosen):
             rgb_stamp, rgb_file, depth_stamp, depth_file = assoc[j][:4]
             t = t0 + k * interval if not args.keep_stamps else float(rgb_stamp)
-            if args.glitch_every and k % args.glitch_every == args.glitch_every - 1:
+            glitch = args.glitch_every and k % args.glitch_every == args.glitch_every - 1
+            if glitch:
                 t = previous_t + 0.001
                 glitches += 1
             source_t = float(rgb_stamp)
             if not args.keep_stamps or t != source_t:
                 t_depth = t + (float(depth_stamp) - float(rgb_stamp))
+                if glitch and t_depth <= previous_t_depth:
+                    # Depth taken earlier than the last frame's: keep the glitched depth stamp
+                    # after the last one (1 ms after it).
+                    t_depth = previous_t_depth + 0.001
                 rgb_stamp, depth_stamp = f"{t:.6f}", f"{t_depth:.6f}"
             if not args.keep_stamps:
                 p = bisect.bisect_left(truth_stamps, source_t)
@@ -149,7 +154,7 @@ def main():
                     without_truth += 1
                 else:
                     truth_lines.append(f"{rgb_stamp} " + " ".join(truth[near][1:8]) + "\n")
-            previous_t = float(rgb_stamp)
+            previous_t, previous_t_depth = float(rgb_stamp), float(depth_stamp)
             fa.write(f"{rgb_stamp} {rgb_file} {depth_stamp} {depth_file}\n")
             fr.write(f"{rgb_stamp} {rgb_file}\n")
             fd.write(f"{depth_stamp} {depth_file}\n")

@@ -131,45 +131,58 @@ TEST(MotionModelTest, RepeatsTheLastRelativeMotion) {
   EXPECT_FALSE(model.valid());
 }
 
-TEST(MotionModelTest, AVelocityLearntOverAGlitchedStampRepeatsOncePerFrame) {
+TEST(MotionModelTest, AroundAGlitchedStampTheVelocityRepeatsOncePerFrame) {
   const SE3 step(so3_exp(Vec3d(0.0, 0.02, 0.0)), Vec3d(0.01, 0.0, -0.02));
+  const auto expect_one_step = [&](const SE3& predicted, const SE3& from) {
+    EXPECT_LT((predicted.matrix() - (step * from).matrix()).norm(), 1e-12);
+  };
   SE3 T;
   MotionModel model;
-  // A 30 Hz camera that drops every other frame now and then: the base interval stays 33 ms.
-  for (const double interval : {0.033, 0.066, 0.033, 0.066, 0.066}) {
+  // A 30 Hz camera that drops a frame now and then: a 33 ms interval is no glitch even while
+  // the third-smallest interval is 66 ms, and the base settles at 33 ms.
+  for (const double interval : {0.033, 0.066, 0.066, 0.033, 0.066}) {
     model.update(step * T, T, interval);
     T = step * T;
   }
-  EXPECT_EQ(model.base_interval_s(), 0.066);  // only two intervals of 33 ms so far
-  model.update(step * T, T, 0.033);           // twice as short as the base: a frame not dropped
-  EXPECT_EQ(model.base_interval_s(), 0.033);
-  EXPECT_EQ(model.interval_s(), 0.033);
-  // The next frame is stamped 1 ms after the last one, but the camera moved one interval's step.
-  const SE3 T_glitch = step * T;
-  model.update(T_glitch, T, 0.001);
-  EXPECT_EQ(model.interval_s(), 0.0) << "the glitched interval counts as unknown";
-  // The frame after it comes 65 ms after the glitched stamp: one step, not 65.
-  const SE3 predicted = model.predict(T_glitch, 0.065);
-  EXPECT_LT((predicted.matrix() - (step * T_glitch).matrix()).norm(), 1e-12);
-  // One glitch does not lower the base interval; a 33 ms interval is still one.
-  EXPECT_EQ(model.base_interval_s(), 0.033);
+  EXPECT_EQ(model.base_interval_s(), 0.066);
   model.update(step * T, T, 0.033);
+  T = step * T;
   EXPECT_EQ(model.interval_s(), 0.033);
-  // Without a history of intervals a short one cannot be judged, and it is kept.
-  MotionModel fresh;
-  fresh.update(T_glitch, T, 0.001);
-  EXPECT_EQ(fresh.interval_s(), 0.001);
-  // reset() keeps the camera's rate. A camera that turns to 60 Hz is no glitch (twice as fast)
-  // and establishes its rate after three frames; 8 ms against 33 ms is one.
+  EXPECT_EQ(model.base_interval_s(), 0.033);
+  // Frame k is stamped 1 ms after frame k-1, but the camera moved one interval's step: its
+  // prediction is one step, not 3% of one.
+  expect_one_step(model.predict(T, 0.001), T);
+  EXPECT_NEAR(model.prior(T, 0.001, MotionPriorConfig{}).sqrt_information(0, 0), 200.0, 1e-9);
+  const SE3 T_k = step * T;
+  model.update(T_k, T, 0.001);
+  EXPECT_EQ(model.interval_s(), 0.0) << "learnt over a glitch: of unknown interval";
+  // Frame k+1 comes 65 ms after the glitched stamp: one step, not 65 (nor 2).
+  expect_one_step(model.predict(T_k, 0.065), T_k);
+  const SE3 T_k1 = step * T_k;
+  model.update(T_k1, T_k, 0.065);
+  EXPECT_EQ(model.interval_s(), 0.0) << "measured from the glitched stamp: unknown too";
+  expect_one_step(model.predict(T_k1, 0.033), T_k1);  // not half a step
+  model.update(step * T_k1, T_k1, 0.033);
+  EXPECT_EQ(model.interval_s(), 0.033);
+  EXPECT_EQ(model.base_interval_s(), 0.033) << "neither interval entered the history";
+
+  // Glitches on every second frame: the base does not follow them.
+  for (int k = 0; k < 20; ++k) {
+    model.update(step * T, T, k % 2 == 0 ? 0.001 : 0.065);
+    EXPECT_EQ(model.interval_s(), 0.0) << "update " << k;
+  }
+  EXPECT_EQ(model.base_interval_s(), 0.033);
+  // reset() keeps the camera's rate; a camera that turns twice as fast is no glitch.
   model.reset();
   EXPECT_EQ(model.base_interval_s(), 0.033);
-  model.update(step * T, T, 0.008);
-  EXPECT_EQ(model.interval_s(), 0.0);
-  for (int k = 0; k < 3; ++k) {
-    model.update(step * T, T, 0.0167);
-    EXPECT_EQ(model.interval_s(), 0.0167);
-  }
-  EXPECT_EQ(model.base_interval_s(), 0.0167);
+  model.update(step * T, T, 0.0167);
+  EXPECT_EQ(model.interval_s(), 0.0167);
+
+  // Without enough history a short interval cannot be judged, and it is kept.
+  MotionModel fresh;
+  for (int k = 0; k < 4; ++k) fresh.update(step * T, T, 0.033);
+  fresh.update(T_k, T, 0.001);
+  EXPECT_EQ(fresh.interval_s(), 0.001);
 }
 
 TEST(MotionModelTest, PriorWidensAcrossAGap) {

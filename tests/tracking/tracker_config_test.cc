@@ -37,6 +37,10 @@ TEST(TrackerConfigTest, ErrorsNameTheKey) {
   c = TrackerConfig{};
   c.keyframes.frames_after_relocalization = -1;
   EXPECT_TRUE(rejects(c, "tracking.keyframes.frames_after_relocalization"));
+  c.keyframes.frames_after_relocalization = c.keyframes.max_frames + 1;
+  EXPECT_TRUE(rejects(c, "tracking.keyframes.frames_after_relocalization"));
+  c.keyframes.frames_after_relocalization = c.keyframes.max_frames;  // ORB-SLAM2's hold
+  EXPECT_NO_THROW(c.validate());
   c = TrackerConfig{};
   c.relocalization.retry_inliers = 60;
   EXPECT_TRUE(rejects(c, "tracking.relocalization.retry_inliers"));

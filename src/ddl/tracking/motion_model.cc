@@ -8,11 +8,14 @@ namespace ddl::tracking {
 
 void MotionModel::update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s) {
   velocity_ = T_c_w_current * T_c_w_previous.inverse();
-  const double base_s = base_interval_s();
-  const bool glitch = interval_s > 0.0 && base_s > 0.0 && interval_s * kGlitchRatio <= base_s;
-  interval_s_ = glitch ? 0.0 : interval_s;
+  // Measured from a glitched stamp (valid_: the two updates are consecutive frames), or a glitch.
+  const bool after_glitch = valid_ && last_interval_glitched_;
+  const bool glitch = is_glitch(interval_s);
+  const bool regular = interval_s > 0.0 && !glitch && !after_glitch;
+  interval_s_ = regular ? interval_s : 0.0;
+  last_interval_glitched_ = glitch;
   valid_ = true;
-  if (interval_s > 0.0) {
+  if (regular) {
     recent_intervals_s_.push_back(interval_s);
     if (recent_intervals_s_.size() > kRateHistory) recent_intervals_s_.pop_front();
   }
@@ -21,13 +24,19 @@ void MotionModel::update(const SE3& T_c_w_current, const SE3& T_c_w_previous, do
 double MotionModel::base_interval_s() const {
   if (recent_intervals_s_.size() < kMinRateHistory) return 0.0;
   std::vector<double> sorted(recent_intervals_s_.begin(), recent_intervals_s_.end());
-  const auto nth = sorted.begin() + static_cast<std::ptrdiff_t>(kMinRateHistory - 1);
+  const auto nth = sorted.begin() + static_cast<std::ptrdiff_t>(kBaseRank - 1);
   std::nth_element(sorted.begin(), nth, sorted.end());
   return *nth;
 }
 
+bool MotionModel::is_glitch(double interval_s) const {
+  const double base_s = base_interval_s();
+  return interval_s > 0.0 && base_s > 0.0 && interval_s * kGlitchRatio <= base_s;
+}
+
 double MotionModel::gap_ratio(double elapsed_s) const {
   if (!(interval_s_ > 0.0) || !(elapsed_s > 0.0)) return 1.0;
+  if (last_interval_glitched_ || is_glitch(elapsed_s)) return 1.0;
   const double ratio = elapsed_s / interval_s_;
   return ratio >= kGapRatio || ratio <= 1.0 / kGapRatio ? ratio : 1.0;
 }

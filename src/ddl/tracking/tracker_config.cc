@@ -62,9 +62,13 @@ void validate_matching(const MatchingConfig& c) {
 void validate_keyframes(const KeyFrameConfig& c) {
   const std::string p = "tracking.keyframes.";
   require_count(c.min_frames, 0, 100000, p + "min_frames");
-  require_count(c.frames_after_relocalization, 0, 100000, p + "frames_after_relocalization");
   require(c.max_frames >= c.min_frames && c.max_frames <= 100000, p + "max_frames", c.max_frames,
           "must be in tracking.keyframes.min_frames..100000");
+  // At most max_frames: the tracker starts as if relocalized at frame 0, and a longer hold would
+  // keep a fresh map of more than max_frames keyframes from growing.
+  require(c.frames_after_relocalization >= 0 && c.frames_after_relocalization <= c.max_frames,
+          p + "frames_after_relocalization", c.frames_after_relocalization,
+          "must be in 0..tracking.keyframes.max_frames");
   require_count(c.tracked_close_max, 0, 100000, p + "tracked_close_max");
   require_count(c.non_tracked_close_min, 0, 100000, p + "non_tracked_close_min");
   require_ratio(c.reference_ratio, p + "reference_ratio");

@@ -45,7 +45,7 @@ struct KeyFrameConfig {
   int max_frames = 30;  // ... and is inserted after this many frames at the latest (= fps)
   int frames_after_relocalization = 5;  // no keyframe this many frames after a relocalization
                                         // once the map has more than max_frames keyframes
-                                        // (ORB-SLAM2: max_frames, 30)
+                                        // (0..max_frames; ORB-SLAM2: max_frames, 30)
   int tracked_close_max = 100;          // "need close points": fewer tracked close points than this
   int non_tracked_close_min = 70;       // ... and more untracked close points than this
   bool close_needs_two_keyframes = true;  // tracked close points count only when seen by >= 2
