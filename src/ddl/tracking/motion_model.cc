@@ -8,8 +8,8 @@ namespace ddl::tracking {
 
 void MotionModel::update(const SE3& T_c_w_current, const SE3& T_c_w_previous, double interval_s) {
   velocity_ = T_c_w_current * T_c_w_previous.inverse();
-  // Measured from a glitched stamp (valid_: the two updates are consecutive frames), or a glitch.
-  const bool after_glitch = valid_ && last_interval_glitched_;
+  // Measured from a glitched stamp (reset() clears the flag when the frames are not consecutive).
+  const bool after_glitch = last_interval_glitched_;
   const bool glitch = is_glitch(interval_s);
   const bool regular = interval_s > 0.0 && !glitch && !after_glitch;
   interval_s_ = regular ? interval_s : 0.0;
