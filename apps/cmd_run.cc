@@ -80,6 +80,11 @@ pipeline::SystemConfig make_system_config(const RunArgs& args) {
   if (args.no_octomap) config.dense.octomap_enabled = false;
   if (args.no_inpainting) config.dense.inpainting_enabled = false;
   if (args.save_masks) config.save_masks = true;
+  if (args.localization_only) config.tracking.localization_only = true;
+  if (config.tracking.localization_only && args.load_map.empty()) {
+    throw ConfigError::for_key("--localization-only (tracking.localization_only)",
+                               "needs a map to track against: --load-map FILE");
+  }
   if (args.save_inpainted) {
     config.dense.save_inpainted_dir = (fs::path(args.output_dir) / "inpainted").string();
   }
@@ -146,6 +151,8 @@ RunResult run_sequence_command(const RunArgs& args,
   run_options.playback_rate = args.playback_rate;
   run_options.drop_late_frames = args.drop_late_frames;
   run_options.evaluate = !args.no_eval;
+  run_options.load_map_path = args.load_map;
+  run_options.save_map_path = args.save_map;
   // Written once the run has found its options valid: a run refused at its start (a bad
   // --first-frame, a missing model) leaves an earlier run's folder consistent.
   run_options.on_start = [&] {
@@ -312,6 +319,16 @@ void add_run_command(CLI::App& app, int& exit_code) {
                 "parts in subfolders)");
   cmd->add_flag("--save-inpainted", args->save_inpainted,
                 "Write repaired keyframes to <out>/inpainted/");
+  cmd->add_option("--save-map", args->save_map,
+                  "Write the sparse map (keyframes, map points) to FILE at the end of the run, "
+                  "also when it is interrupted (docs/map-files.md)");
+  cmd->add_option("--load-map", args->load_map,
+                  "Start in the sparse map FILE written by --save-map with the same camera and "
+                  "vocabulary: the first frames relocalize in it, and the run extends it "
+                  "(docs/map-files.md)");
+  cmd->add_flag("--localization-only", args->localization_only,
+                "With --load-map: track against the loaded map without changing it (no keyframe "
+                "is created; ORB-SLAM2's localization mode; tracking.localization_only)");
   cmd->add_flag("--no-eval", args->no_eval, "Skip the evaluation against groundtruth.txt");
   cmd->add_flag("--viewer", args->viewer,
                 "Show the viewer window: the frame with its dynamic masks and keypoints beside "

@@ -34,6 +34,9 @@ struct RunArgs {
   bool no_inpainting = false;
   bool save_masks = false;
   bool save_inpainted = false;
+  std::string load_map;            // --load-map FILE: start in a saved sparse map
+  std::string save_map;            // --save-map FILE: write the sparse map at the end
+  bool localization_only = false;  // --localization-only: track against the loaded map only
   std::string segmentation;
   bool viewer = false;            // --viewer: the viewer window
   std::string save_viewer_dir;    // --save-viewer DIR: the viewer's images

@@ -2,6 +2,16 @@
 
 namespace ddl::map {
 
+void Map::reserve_ids(KeyFrameId next_keyframe_id, MapPointId next_map_point_id) {
+  KeyFrameId kf = next_keyframe_id_.load();
+  while (kf < next_keyframe_id && !next_keyframe_id_.compare_exchange_weak(kf, next_keyframe_id)) {
+  }
+  MapPointId mp = next_map_point_id_.load();
+  while (mp < next_map_point_id &&
+         !next_map_point_id_.compare_exchange_weak(mp, next_map_point_id)) {
+  }
+}
+
 bool Map::add_keyframe(const KeyFramePtr& keyframe) {
   std::lock_guard lock(index_mutex_);
   if (keyframe->id() < floor_) return false;

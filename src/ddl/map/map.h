@@ -32,6 +32,9 @@ class Map {
 
   KeyFrameId next_keyframe_id() { return next_keyframe_id_.fetch_add(1); }
   MapPointId next_map_point_id() { return next_map_point_id_.fetch_add(1); }
+  /// Raises the id counters to at least these values (a map loaded from a file: new keyframes
+  /// and points must not take the ids of loaded ones).
+  void reserve_ids(KeyFrameId next_keyframe_id, MapPointId next_map_point_id);
 
   /// Adds the keyframe, unless it was made for the map that clear() emptied (its id is below
   /// the floor clear() returned): then nothing happens and false is returned. The first keyframe

@@ -65,7 +65,8 @@ std::vector<MapPoint::Observation> MapPoint::observations() const {
   std::vector<Observation> out;
   out.reserve(observations_.size());
   for (const auto& [id, obs] : observations_) {
-    if (auto kf = obs.keyframe.lock()) out.push_back({std::move(kf), obs.feature_index});
+    if (auto kf = obs.keyframe.lock())
+      out.push_back({std::move(kf), obs.feature_index, obs.stereo});
   }
   return out;
 }
@@ -236,6 +237,11 @@ double MapPoint::found_ratio() const {
 int MapPoint::found_count() const {
   std::lock_guard lock(mutex_);
   return found_;
+}
+
+int MapPoint::visible_count() const {
+  std::lock_guard lock(mutex_);
+  return visible_;
 }
 
 bool MapPoint::is_bad() const {

@@ -27,6 +27,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   struct Observation {
     std::shared_ptr<KeyFrame> keyframe;
     std::size_t feature_index = 0;
+    bool stereo = false;  // counted twice (add_observation)
   };
 
   MapPoint(MapPointId id, const Vec3d& p_w, const std::shared_ptr<KeyFrame>& reference_keyframe);
@@ -90,6 +91,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   /// found / visible: how often the point was matched when it should have been seen.
   double found_ratio() const;
   int found_count() const;
+  int visible_count() const;
 
   bool is_bad() const;
   /// Detaches the point from all keyframes and marks it bad. The Map removes it from its index.

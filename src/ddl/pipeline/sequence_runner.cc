@@ -86,6 +86,8 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"relocalizations_in_same_frame", s.relocalizations_in_same_frame},
           {"frames_with_motion_prior", s.frames_with_motion_prior},
           {"keyframes_created", s.keyframes_created},
+          {"keyframes_loaded", s.keyframes_loaded},
+          {"map_points_loaded", s.map_points_loaded},
           {"keyframes", s.keyframes},
           {"map_points", s.map_points},
           {"loops_closed", s.loops_closed},
@@ -139,6 +141,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   if (options.max_frames > 0 && options.max_frames < end - begin) end = begin + options.max_frames;
   const std::size_t total = end - begin;
 
+  // A map that cannot be loaded refuses the run before anything is written or removed.
+  if (!options.load_map_path.empty()) system.load_map(options.load_map_path);
   // Ctrl-C while the models loaded: nothing ran, so the earlier run's outputs stay (review, stop
   // 25: they were removed and an empty run written in their place).
   if (stop != nullptr && stop->load()) throw Interrupted();
@@ -248,6 +252,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
                              "DDL-SLAM keyframe trajectory (T_w_c) of " + dataset.name());
   });
 
+  bool sparse_map_written = false;
+  if (!options.save_map_path.empty()) {
+    sparse_map_written = write_output([&] { system.save_map(options.save_map_path); });
+  }
   for (const std::string& e : system.frame_output_errors()) {
     spdlog::error("{}", e);
     output_errors.push_back(e);
@@ -291,6 +299,7 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   }
   if (masks != nullptr) summary["masks"] = masks->to_json();
   if (camera_written) summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
+  if (sparse_map_written) summary["outputs"]["sparse_map"] = options.save_map_path;
   if (keyframes_written) {
     summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
   }

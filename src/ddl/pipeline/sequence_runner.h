@@ -6,6 +6,7 @@
 //                           mask quality (with RunOptions::mask_evaluator)
 //   config.yaml             the effective configuration (written by the caller, see apps)
 //   eval/                   ATE/RPE JSON and plots when the dataset has ground truth
+//   the sparse map          where RunOptions::save_map_path says (docs/map-files.md)
 // Outputs are written also when the run stops early (Ctrl-C through `stop`, or an error in a
 // frame): the trajectory so far is flushed before the error propagates.
 
@@ -33,6 +34,12 @@ struct RunOptions {
   /// (FramePrefetcher; the segmentation stage then holds one frame ahead of tracking): latency
   /// stays bounded, which frames are dropped depends on timing.
   bool drop_late_frames = false;
+  /// Non-empty: the sparse map to start in (System::load_map), loaded before the first frame,
+  /// before any output is written or removed.
+  std::string load_map_path;
+  /// Non-empty: where the sparse map is written at the end (System::save_map), also when the
+  /// run is interrupted or fails in a frame; summary["outputs"]["sparse_map"] names it.
+  std::string save_map_path;
   /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
   /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).
   MaskEvaluator* mask_evaluator = nullptr;

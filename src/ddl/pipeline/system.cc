@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 
@@ -197,9 +198,70 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
   return exclusion;
 }
 
+map::MapFileContents System::load_map(const std::string& path) {
+  if (stats_.frames > 0 || map_->keyframe_count() > 0) {
+    throw Error(fmt::format("{}: a map is loaded before the first frame, into an empty map", path));
+  }
+  const auto accept = [&](const map::MapFileInfo& info) {
+    if (info.descriptor_tag != vocabulary_->descriptor_tag() ||
+        info.vocabulary_words != vocabulary_->word_count()) {
+      throw InputError::at(
+          path, fmt::format("built with another vocabulary ({} words, descriptor tag {:016x}); "
+                            "this run's has {} words and tag {:016x}",
+                            info.vocabulary_words, info.descriptor_tag, vocabulary_->word_count(),
+                            vocabulary_->descriptor_tag()));
+    }
+    const auto close = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::abs(b); };
+    if (info.image_width != camera_.width || info.image_height != camera_.height ||
+        !close(info.fx, camera_.fx) || !close(info.fy, camera_.fy) || !close(info.cx, camera_.cx) ||
+        !close(info.cy, camera_.cy)) {
+      throw InputError::at(
+          path, fmt::format("built with another camera ({}x{}, fx {} fy {} cx {} cy {}); this "
+                            "run's camera '{}' is {}x{}, fx {} fy {} cx {} cy {}",
+                            info.image_width, info.image_height, info.fx, info.fy, info.cx, info.cy,
+                            camera_.name, camera_.width, camera_.height, camera_.fx, camera_.fy,
+                            camera_.cx, camera_.cy));
+    }
+  };
+  const map::MapFileContents contents = map::load_map_file(path, *map_, accept);
+  if (contents.keyframes == 0) throw InputError::at(path, "the map holds no keyframe");
+  for (const map::KeyFramePtr& keyframe : map_->keyframes()) {
+    vocabulary::BowVector bow;
+    vocabulary::FeatureVector feature_vector;
+    vocabulary_->transform(keyframe->features().descriptors, config_.tracking.frame.bow_levels_up,
+                           bow, feature_vector);
+    keyframe->set_bow(std::move(bow), std::move(feature_vector));
+    database_->add(keyframe->id(), keyframe->bow());
+  }
+  tracker_->start_in_loaded_map();
+  map_loaded_ = true;
+  stats_.keyframes_loaded = contents.keyframes;
+  stats_.map_points_loaded = contents.map_points;
+  spdlog::info("{}: map loaded, {} keyframes and {} map points", path, contents.keyframes,
+               contents.map_points);
+  return contents;
+}
+
+void System::save_map(const std::string& path) const {
+  map::MapFileInfo info;
+  info.image_width = camera_.width;
+  info.image_height = camera_.height;
+  info.fx = camera_.fx;
+  info.fy = camera_.fy;
+  info.cx = camera_.cx;
+  info.cy = camera_.cy;
+  info.descriptor_tag = vocabulary_->descriptor_tag();
+  info.vocabulary_words = vocabulary_->word_count();
+  map::save_map_file(*map_, info, path);
+}
+
 FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn) {
   if (finished_) throw Error("System::process called after finish()");
   rethrow_worker_error();
+  if (config_.tracking.localization_only && !map_loaded_) {
+    throw ConfigError::for_key("tracking.localization_only",
+                               "needs a map loaded from a file (--load-map)");
+  }
   Stopwatch frame_watch;
 
   FrameOutcome outcome;

@@ -43,6 +43,7 @@
 #include "ddl/io/trajectory_io.h"
 #include "ddl/loop/loop_closer.h"
 #include "ddl/map/map.h"
+#include "ddl/map/map_file.h"
 #include "ddl/mapping/local_mapper.h"
 #include "ddl/pipeline/dense_mapper.h"
 #include "ddl/pipeline/dynamic_front_end.h"
@@ -65,8 +66,10 @@ struct SystemStatistics {
   std::size_t relocalizations_in_same_frame = 0;  // of them: the frame whose tracking failed
   std::size_t frames_with_motion_prior = 0;       // tracked with the motion model's prior
   std::size_t keyframes_created = 0;
-  std::size_t keyframes = 0;   // alive in the map at the end
-  std::size_t map_points = 0;  // alive in the map at the end
+  std::size_t keyframes_loaded = 0;   // from the map file (load_map)
+  std::size_t map_points_loaded = 0;  // ... and its points
+  std::size_t keyframes = 0;          // alive in the map at the end
+  std::size_t map_points = 0;         // alive in the map at the end
   std::size_t loops_closed = 0;
   std::size_t map_resets = 0;
   std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose
@@ -101,6 +104,17 @@ class System {
   /// and tracking, and hands new keyframes on. `cnn`: the frame's CNN mask from segment() when it
   /// was computed ahead (SegmentationStage); std::nullopt = segment inline.
   FrameOutcome process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn = std::nullopt);
+
+  /// Loads a sparse map saved by save_map() (map/map_file.h), before the first process(): the
+  /// first frames relocalize in it, and tracking.localization_only tracks against it without
+  /// changing it. Its keyframes get their bags of words and enter the keyframe database (for
+  /// relocalization and loop detection). Throws ddl::InputError naming the file when it cannot
+  /// be read or was built with another camera or vocabulary; ddl::Error when frames were
+  /// processed already.
+  map::MapFileContents load_map(const std::string& path);
+  /// Writes the sparse map (map/map_file.h); after finish() in threaded mode, so that no stage
+  /// changes it meanwhile. Throws ddl::OutputError naming the file.
+  void save_map(const std::string& path) const;
 
   /// The CNN mask of one frame (empty when dynamic removal or segmentation is off). It depends
   /// only on the frame. May run on one other thread while process() runs, provided process() is
@@ -185,6 +199,7 @@ class System {
   std::exception_ptr worker_error_;
   std::atomic<bool> failed_{false};
   bool finished_ = false;
+  bool map_loaded_ = false;  // load_map()
 };
 
 }  // namespace ddl::pipeline

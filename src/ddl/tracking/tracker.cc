@@ -274,7 +274,7 @@ void Tracker::track_locked(Frame& frame, const MappingStatus& mapping, TrackingR
     last_frame_tracked_ = false;
     trajectory_.add_lost(frame.timestamp_s());
     if (!was_lost) spdlog::info("tracking lost at frame {}", result.frame_index);
-    if (config_.reset_when_lost_max_keyframes >= 0 &&
+    if (!map_loaded_ && config_.reset_when_lost_max_keyframes >= 0 &&
         map_->keyframe_count() <= static_cast<std::size_t>(config_.reset_when_lost_max_keyframes)) {
       reset(result);
     }
@@ -458,7 +458,7 @@ bool Tracker::relocalize(Frame& frame) {
 
 void Tracker::maybe_create_keyframe(Frame& frame, const MappingStatus& mapping,
                                     TrackingResult& result) {
-  if (!reference_keyframe_) return;
+  if (!reference_keyframe_ || config_.localization_only) return;
   KeyFrameContext context;
   context.frame_id = frame.id();
   context.last_keyframe_frame_id = last_keyframe_frame_id_;
@@ -501,6 +501,17 @@ void Tracker::reset(TrackingResult& result) {
   last_frame_tracked_ = false;
   state_ = TrackingState::kNotInitialized;
   result.map_reset = true;
+}
+
+void Tracker::start_in_loaded_map() {
+  if (next_frame_id_ != 0) {
+    throw Error("Tracker::start_in_loaded_map: call it before the first frame");
+  }
+  if (map_->keyframe_count() == 0) {
+    throw Error("Tracker::start_in_loaded_map: the map is empty");
+  }
+  map_loaded_ = true;
+  state_ = TrackingState::kLost;
 }
 
 io::Trajectory Tracker::camera_trajectory() const {

@@ -85,6 +85,11 @@ class Tracker {
   TrackingResult track(const io::RgbdFrame& frame, const cv::Mat& dynamic_mask,
                        const MappingStatus& mapping);
 
+  /// Before the first frame, with a map loaded into the tracker's map (map::load_map_file) and
+  /// its keyframes in the keyframe database: tracking starts lost, so the first frames
+  /// relocalize in that map instead of starting a new one, and being lost never resets it.
+  void start_in_loaded_map();
+
   /// T_w_c of every tracked frame so far, from the current keyframe poses.
   io::Trajectory camera_trajectory() const;
 
@@ -154,6 +159,7 @@ class Tracker {
   FrameId last_keyframe_frame_id_ = 0;
   FrameId last_relocalization_frame_id_ = 0;
   int local_map_inliers_ = 0;
+  bool map_loaded_ = false;  // start_in_loaded_map(): never reset the map
 };
 
 }  // namespace ddl::tracking

@@ -23,6 +23,7 @@
 #include <cstring>
 #include <memory>
 
+#include "ddl/core/binary_file.h"
 #include "ddl/core/error.h"
 #include "ddl/vocabulary/vocabulary.h"
 
@@ -49,34 +50,6 @@ template <typename T>
 void write_at(unsigned char* p, T value) {
   std::memcpy(p, &value, sizeof(T));
 }
-
-std::uint64_t mix(std::uint64_t x) { return std::rotl(x * 0x9E3779B97F4A7C15ull, 31); }
-
-// Detects corruption (not tampering): four independent multiply-rotate lanes over 64-bit words,
-// each step a bijection of the lane state, so any single changed word changes the result.
-// `size` is a multiple of 8 (the header and every node are).
-std::uint64_t checksum(const unsigned char* data, std::size_t size) {
-  std::uint64_t lanes[4] = {0x243F6A8885A308D3ull, 0x13198A2E03707344ull, 0xA4093822299F31D0ull,
-                            0x082EFA98EC4E6C89ull};
-  const std::size_t words = size / 8;
-  std::size_t i = 0;
-  for (; i + 4 <= words; i += 4) {
-    for (std::size_t l = 0; l < 4; ++l) {
-      lanes[l] = mix(lanes[l] ^ read_at<std::uint64_t>(data + 8 * (i + l)));
-    }
-  }
-  for (; i < words; ++i) lanes[0] = mix(lanes[0] ^ read_at<std::uint64_t>(data + 8 * i));
-  std::uint64_t h = size;
-  for (std::uint64_t lane : lanes) h = mix(h ^ lane);
-  return h;
-}
-
-struct FileCloser {
-  void operator()(std::FILE* f) const {
-    if (f != nullptr) std::fclose(f);
-  }
-};
-using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
 // A read-only memory map of a whole file: the page cache is read in place, with no buffer to
 // allocate and fill (the load cost of a large vocabulary is mostly memory traffic).
@@ -141,29 +114,9 @@ void Vocabulary::save(const std::string& path) const {
     std::memcpy(q + 4, descriptors_[i].data(), kDescriptorBytes);
     write_at<float>(q + 4 + kDescriptorBytes, weights_[i]);
   }
-  write_at<std::uint64_t>(p + payload, checksum(p, payload));
+  write_at<std::uint64_t>(p + payload, checksum64(p, payload));
 
-  // Write beside the target and rename, so a failed or interrupted save never leaves a truncated
-  // file under the final name.
-  const std::string tmp_path = path + ".tmp";
-  {
-    FilePtr file(std::fopen(tmp_path.c_str(), "wb"));
-    if (!file) {
-      throw Error(fmt::format("{}: cannot write: {}", tmp_path, std::strerror(errno)));
-    }
-    const std::size_t total = payload + kChecksumBytes;
-    const bool ok = std::fwrite(p, 1, total, file.get()) == total;
-    const bool closed = std::fclose(file.release()) == 0;
-    if (!ok || !closed) {
-      std::remove(tmp_path.c_str());
-      throw Error(fmt::format("{}: write failed: {}", tmp_path, std::strerror(errno)));
-    }
-  }
-  if (std::rename(tmp_path.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    std::remove(tmp_path.c_str());
-    throw Error(fmt::format("{}: cannot write: {}", path, reason));
-  }
+  write_file_atomically(path, p, payload + kChecksumBytes, "the vocabulary");
 }
 
 Vocabulary Vocabulary::load(const std::string& path) {
@@ -208,7 +161,7 @@ Vocabulary Vocabulary::load(const std::string& path) {
                                 size, node_count, max_nodes));
   }
   const std::size_t payload = size - kChecksumBytes;
-  if (checksum(p, payload) != read_at<std::uint64_t>(p + payload)) {
+  if (checksum64(p, payload) != read_at<std::uint64_t>(p + payload)) {
     throw InputError::at(path, "checksum mismatch: the file is corrupted");
   }
   if (weighting_value > static_cast<std::uint32_t>(Weighting::kBinary)) {

@@ -1,0 +1,90 @@
+#include "ddl/core/binary_file.h"
+
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include "ddl/core/error.h"
+
+namespace ddl {
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "the project's binary files are little-endian; add byte swapping for this platform");
+
+std::uint64_t mix(std::uint64_t x) { return std::rotl(x * 0x9E3779B97F4A7C15ull, 31); }
+
+std::uint64_t word_at(const unsigned char* p) {
+  std::uint64_t value;
+  std::memcpy(&value, p, sizeof(value));
+  return value;
+}
+
+struct FileCloser {
+  void operator()(std::FILE* f) const {
+    if (f != nullptr) std::fclose(f);
+  }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+}  // namespace
+
+std::uint64_t checksum64(const unsigned char* data, std::size_t size) {
+  std::uint64_t lanes[4] = {0x243F6A8885A308D3ull, 0x13198A2E03707344ull, 0xA4093822299F31D0ull,
+                            0x082EFA98EC4E6C89ull};
+  const std::size_t words = size / 8;
+  std::size_t i = 0;
+  for (; i + 4 <= words; i += 4) {
+    for (std::size_t l = 0; l < 4; ++l) lanes[l] = mix(lanes[l] ^ word_at(data + 8 * (i + l)));
+  }
+  for (; i < words; ++i) lanes[0] = mix(lanes[0] ^ word_at(data + 8 * i));
+  std::uint64_t h = size;
+  for (std::uint64_t lane : lanes) h = mix(h ^ lane);
+  return h;
+}
+
+void write_file_atomically(const std::string& path, const unsigned char* data, std::size_t size,
+                           const std::string& what) {
+  const std::string tmp_path = path + ".tmp";
+  {
+    FilePtr file(std::fopen(tmp_path.c_str(), "wb"));
+    if (!file) {
+      throw OutputError::at(tmp_path,
+                            fmt::format("cannot write {}: {}", what, std::strerror(errno)));
+    }
+    const bool ok = std::fwrite(data, 1, size, file.get()) == size;
+    const bool closed = std::fclose(file.release()) == 0;
+    if (!ok || !closed) {
+      const std::string reason = std::strerror(errno);
+      std::remove(tmp_path.c_str());
+      throw OutputError::at(tmp_path, fmt::format("writing {} failed: {}", what, reason));
+    }
+  }
+  if (std::rename(tmp_path.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(tmp_path.c_str());
+    throw OutputError::at(path, fmt::format("cannot write {}: {}", what, reason));
+  }
+}
+
+std::vector<unsigned char> read_whole_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
+  }
+  if (!S_ISREG(st.st_mode)) throw InputError::at(path, "not a regular file");
+  FilePtr file(std::fopen(path.c_str(), "rb"));
+  if (!file) throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(st.st_size));
+  if (!bytes.empty() && std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) {
+    throw InputError::at(path, fmt::format("cannot read all {} bytes", bytes.size()));
+  }
+  return bytes;
+}
+
+}  // namespace ddl

@@ -1,0 +1,56 @@
+#pragma once
+// The sparse map on disk: keyframes (pose, features, spanning-tree parent, loop edges) and map
+// points (position, observations, match statistics), so that a later run can relocalize in a map
+// built before (localization mode) or extend it (docs/map-files.md has the layout and the use).
+//
+// What is not stored is rebuilt on load: the feature grid and scale pyramid of each keyframe, the
+// covisibility graph (KeyFrame::update_connections from the observations), each point's
+// descriptor, normal and distance range; the bags of words need the vocabulary and are computed
+// by the caller (pipeline::System::load_map). Dense data (depth images, the octree) is not part
+// of the file.
+//
+// Layout (little-endian, version 1): a 96-byte header, the keyframes and points in id order,
+// zero padding to a multiple of 8 bytes, and a u64 checksum of every preceding byte
+// (core/binary_file.h). Loading checks the magic, version, size, checksum and every index and id
+// it reads, and names the file and the record at fault.
+// Pure functions of their inputs; save reads the map through its thread-safe accessors.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "ddl/map/map.h"
+
+namespace ddl::map {
+
+/// What a map can be used with, recorded beside it and checked by the loader's caller.
+struct MapFileInfo {
+  int image_width = 0;  // the undistorted camera of the keyframes' features
+  int image_height = 0;
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
+  std::uint64_t descriptor_tag = 0;    // vocabulary::descriptor_fingerprint of the BRIEF pattern
+  std::uint64_t vocabulary_words = 0;  // word count of the vocabulary the map was built with
+};
+
+/// What load_map_file() read.
+struct MapFileContents {
+  MapFileInfo info;
+  std::size_t keyframes = 0;
+  std::size_t map_points = 0;
+};
+
+/// Writes the good keyframes and points of `map` (atomically: through a temporary file and a
+/// rename). Observations of keyframes that are not stored are left out. Throws ddl::OutputError
+/// naming the file when it cannot be written.
+void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path);
+
+/// Fills `map`, which must be empty and never have held anything (ddl::Error otherwise), with
+/// the file's keyframes and points and raises its id counters past theirs. The first keyframe of
+/// the file becomes the map's origin. Throws ddl::InputError naming the file (and the record)
+/// when it is not a readable map file of this version or is corrupted. `accept`, when given, sees
+/// the header before anything is added to `map` and throws to refuse the file (a map of another
+/// camera or vocabulary).
+MapFileContents load_map_file(const std::string& path, Map& map,
+                              const std::function<void(const MapFileInfo&)>& accept = {});
+
+}  // namespace ddl::map
