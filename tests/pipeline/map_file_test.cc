@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "ddl/core/binary_file.h"
 #include "ddl/core/error.h"
 #include "ddl/pipeline/system.h"
 #include "pipeline_test_support.h"
@@ -24,8 +26,16 @@
 namespace ddl::pipeline {
 namespace {
 
-using testing::core_config;
 using testing::default_vocabulary;
+
+/// The SLAM core with the geometry check (no CNN): keyframes keep their depth images, which the
+/// map file stores beside them.
+SystemConfig core_config() {
+  SystemConfig config = testing::core_config();
+  config.dynamic.enabled = true;
+  config.dynamic.use_segmentation = false;
+  return config;
+}
 
 // syn_static_rpy: rotations about a nearly fixed position, so later frames see mapped parts.
 constexpr int kFrames = 180;
@@ -104,6 +114,15 @@ TEST(MapFile, ALoadedMapHoldsTheSavedKeyframesPointsAndTree) {
   EXPECT_EQ(contents.info.image_width, s.source->camera().width);
   EXPECT_DOUBLE_EQ(contents.info.fx, s.source->camera().fx);
   EXPECT_EQ(contents.info.vocabulary_words, default_vocabulary()->word_count());
+  // Every keyframe's depth image, to TUM's 0.2 mm unit.
+  EXPECT_EQ(contents.images.size(), contents.keyframes);
+  for (const auto& [id, images] : contents.images) {
+    const std::optional<map::KeyFrameImages> original =
+        s.system->dynamic_front_end().keyframe_images(id);
+    ASSERT_TRUE(original.has_value()) << "keyframe " << id;
+    EXPECT_LE(cv::norm(original->depth_m, images.depth_m, cv::NORM_INF), 0.5 / 5000.0 + 1e-6);
+    EXPECT_EQ(cv::countNonZero(original->depth_m > 0), cv::countNonZero(images.depth_m > 0));
+  }
 
   const std::vector<map::KeyFramePtr> a = saved.keyframes();
   const std::vector<map::KeyFramePtr> b = loaded.keyframes();
@@ -164,7 +183,12 @@ TEST(MapFile, ALoadedMapHoldsTheSavedKeyframesPointsAndTree) {
   // Saved again, the loaded map gives the same file.
   const auto again = temp_path("again.ddlmap");
   map::MapFileInfo info = contents.info;
-  map::save_map_file(loaded, info, again.string());
+  map::save_map_file(loaded, info, again.string(),
+                     [&](map::KeyFrameId id) -> std::optional<map::KeyFrameImages> {
+                       const auto it = contents.images.find(id);
+                       if (it == contents.images.end()) return std::nullopt;
+                       return it->second;
+                     });
   EXPECT_TRUE(read_bytes(again) == read_bytes(s.map_path));
   std::filesystem::remove(again);
 }
@@ -200,6 +224,13 @@ TEST(MapFile, ADamagedOrForeignFileIsRefusedWithItsName) {
   version[8] = 9;
   expect_refused(version, "unsupported map file version 9");
   expect_refused({}, "not a DDL-SLAM map file");
+  // Checks beyond the checksum: the origin (the first keyframe, whose parent field follows the
+  // 96-byte header, its id, stamp and pose) given a parent, with the checksum made right again.
+  std::vector<unsigned char> rooted = good;
+  std::memcpy(rooted.data() + 96 + 72, rooted.data() + 96, 8);  // parent = its own id
+  const std::uint64_t sum = checksum64(rooted.data(), rooted.size() - 8);
+  std::memcpy(rooted.data() + rooted.size() - 8, &sum, 8);
+  expect_refused(rooted, "the origin has a parent");
   std::filesystem::remove(bad);
 
   map::Map missing;
@@ -242,6 +273,10 @@ TEST(MapFile, LocalizationOnlyRelocalizesInTheSavedMapAndTracksWithoutChangingIt
   EXPECT_EQ(stats.keyframes_created, 0u);
   EXPECT_EQ(stats.keyframes, contents.keyframes);
   EXPECT_EQ(stats.keyframes_loaded, contents.keyframes);
+  // The stored depth images are the geometry check's references: it runs on every frame.
+  EXPECT_EQ(stats.keyframe_depth_images_loaded, contents.keyframes);
+  EXPECT_EQ(stats.geometry_checks_without_reference, 0u);
+  EXPECT_GE(stats.geometry_checks_low_cost + stats.geometry_checks_predicted, stats.frames - 1);
   const testing::PoseError worst = worst_error(system.camera_trajectory(), s);
   std::printf("worst error %.4f m, %.3f deg\n", worst.translation_m, worst.rotation_deg);
   EXPECT_LT(worst.translation_m, 0.03);

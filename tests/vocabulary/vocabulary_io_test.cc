@@ -139,6 +139,8 @@ TEST_F(VocabularyFile, CorruptedByteFailsTheChecksum) {
 }
 
 TEST_F(VocabularyFile, SaveToUnwritablePathNamesIt) {
+  // A regular file stands where the folder would be created.
+  { std::ofstream(path("no_such_dir")) << "a file"; }
   const std::string p = path("no_such_dir/v.dvoc");
   try {
     vocabulary_.save(p);

@@ -48,30 +48,6 @@ std::uint64_t checksum64(const unsigned char* data, std::size_t size) {
   return h;
 }
 
-void write_file_atomically(const std::string& path, const unsigned char* data, std::size_t size,
-                           const std::string& what) {
-  const std::string tmp_path = path + ".tmp";
-  {
-    FilePtr file(std::fopen(tmp_path.c_str(), "wb"));
-    if (!file) {
-      throw OutputError::at(tmp_path,
-                            fmt::format("cannot write {}: {}", what, std::strerror(errno)));
-    }
-    const bool ok = std::fwrite(data, 1, size, file.get()) == size;
-    const bool closed = std::fclose(file.release()) == 0;
-    if (!ok || !closed) {
-      const std::string reason = std::strerror(errno);
-      std::remove(tmp_path.c_str());
-      throw OutputError::at(tmp_path, fmt::format("writing {} failed: {}", what, reason));
-    }
-  }
-  if (std::rename(tmp_path.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    std::remove(tmp_path.c_str());
-    throw OutputError::at(path, fmt::format("cannot write {}: {}", what, reason));
-  }
-}
-
 std::vector<unsigned char> read_whole_file(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {

@@ -1,7 +1,7 @@
 #pragma once
 // Helpers of the project's binary files (vocabulary, sparse map): a checksum that detects
-// corruption, and a whole-file write that never leaves a truncated file under the final name.
-// Pure functions: thread-safe.
+// corruption and a whole-file read. They are written with write_file_atomically
+// (core/filesystem.h). Pure functions: thread-safe.
 
 #include <cstddef>
 #include <cstdint>
@@ -14,12 +14,6 @@ namespace ddl {
 /// little-endian words, each step a bijection of the lane state, so any single changed word
 /// changes the result. `size` must be a multiple of 8 (trailing bytes are not read).
 std::uint64_t checksum64(const unsigned char* data, std::size_t size);
-
-/// Writes `size` bytes to `path` through `path`.tmp and a rename, so a failed or interrupted
-/// write never leaves a truncated file under the final name. Throws ddl::OutputError naming the
-/// file and `what` it holds.
-void write_file_atomically(const std::string& path, const unsigned char* data, std::size_t size,
-                           const std::string& what);
 
 /// The whole file. Throws ddl::InputError naming the file when it cannot be read or is not a
 /// regular file.

@@ -10,7 +10,9 @@
 //     i64 parent id (-1: none), u32 loop edge count, u64[] loop edge ids,
 //     u32 pyramid levels, f64 scale factor, u32 feature count N,
 //     N x (f32 x, y, size, angle, response, i32 octave), N x u8[32] descriptor,
-//     N x f32 depth (0: none), N x f32 u_right (< 0: none)
+//     N x f32 depth (0: none), N x f32 u_right (< 0: none),
+//     u32 byte count and a 16-bit PNG of the depth image at 5000 per metre (0 bytes: none),
+//     u32 byte count and an 8-bit PNG of the dynamic mask (0 bytes: none)
 //   map point, in id order:
 //     u64 id, u64 reference keyframe id, f64[3] position, i32 visible, i32 found,
 //     u32 observation count, observations x (u64 keyframe id, u32 feature index, u8 stereo)
@@ -24,11 +26,13 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <vector>
 
 #include "ddl/core/binary_file.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 
 namespace ddl::map {
 namespace {
@@ -40,6 +44,14 @@ constexpr std::size_t kChecksumBytes = 8;
 constexpr std::size_t kDescriptorBytes = 32;
 constexpr std::int64_t kNoParent = -1;
 constexpr std::uint32_t kMaxLevels = 32;
+constexpr double kDepthUnitsPerMetre = 5000.0;  // TUM's depth PNGs
+// Bounds that no real map reaches, so that a damaged file that passes the checksum cannot ask for
+// absurd memory: ids stay far from overflow, a keyframe was tracked with at least 30 matches
+// (tracking.matching.local_map_min_inliers), and a point's representative descriptor compares all
+// its observations pairwise.
+constexpr std::uint64_t kMaxId = std::uint64_t{1} << 62;
+constexpr std::size_t kMinFeatures = 10;
+constexpr std::size_t kMaxObservations = 4096;
 
 class Writer {
  public:
@@ -99,7 +111,33 @@ class Reader {
   std::string record_;
 };
 
-void write_keyframe(Writer& w, const KeyFrame& kf, const std::set<KeyFrameId>& stored) {
+void write_png(Writer& w, const cv::Mat& image) {
+  std::vector<unsigned char> png;
+  if (!image.empty() && !cv::imencode(".png", image, png)) png.clear();
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(png.size()));
+  w.put_bytes(png.data(), png.size());
+}
+
+void write_images(Writer& w, const std::optional<KeyFrameImages>& images, const MapFileInfo& info) {
+  const cv::Size size(info.image_width, info.image_height);
+  cv::Mat depth_units;
+  cv::Mat mask;
+  if (images && images->depth_m.type() == CV_32FC1 && images->depth_m.size() == size) {
+    // Rounded to TUM's unit; beyond 13.1 m (and non-finite) stored as no measurement.
+    cv::Mat depth = images->depth_m.clone();
+    depth.setTo(0.0f, ~(depth == depth) | (depth > 65535.0 / kDepthUnitsPerMetre) | (depth < 0.0f));
+    depth.convertTo(depth_units, CV_16UC1, kDepthUnitsPerMetre);
+    if (images->dynamic_mask.type() == CV_8UC1 && images->dynamic_mask.size() == size &&
+        cv::countNonZero(images->dynamic_mask) > 0) {
+      mask = images->dynamic_mask != 0;
+    }
+  }
+  write_png(w, depth_units);
+  write_png(w, mask);
+}
+
+void write_keyframe(Writer& w, const KeyFrame& kf, const std::set<KeyFrameId>& stored,
+                    const KeyFrameImagesFn& images, const MapFileInfo& info) {
   w.put<std::uint64_t>(kf.id());
   w.put<double>(kf.timestamp_s());
   const SE3 T_c_w = kf.T_c_w();
@@ -129,6 +167,7 @@ void write_keyframe(Writer& w, const KeyFrame& kf, const std::set<KeyFrameId>& s
   for (std::size_t i = 0; i < n; ++i) w.put_bytes(f.descriptors.ptr(static_cast<int>(i)), 32);
   for (std::size_t i = 0; i < n; ++i) w.put<float>(f.depth_m[i]);
   for (std::size_t i = 0; i < n; ++i) w.put<float>(f.u_right.empty() ? -1.0f : f.u_right[i]);
+  write_images(w, images ? images(kf.id()) : std::nullopt, info);
 }
 
 struct PointRecord {
@@ -156,6 +195,8 @@ std::shared_ptr<FrameFeatures> read_features(Reader& r, const MapFileInfo& info)
   }
   constexpr std::size_t kFeatureBytes = 24 + kDescriptorBytes + 8;
   const std::size_t n = r.count(r.get<std::uint32_t>(), kFeatureBytes, "features");
+  if (n < kMinFeatures)
+    r.fail(fmt::format("{} features (a keyframe has at least {})", n, kMinFeatures));
   auto f = std::make_shared<FrameFeatures>();
   f->pyramid = features::make_scale_pyramid(static_cast<int>(levels), scale_factor);
   f->keypoints.resize(n);
@@ -167,8 +208,9 @@ std::shared_ptr<FrameFeatures> read_features(Reader& r, const MapFileInfo& info)
     k.angle = r.get<float>();
     k.response = r.get<float>();
     k.octave = r.get<std::int32_t>();
-    if (!std::isfinite(k.pt.x) || !std::isfinite(k.pt.y)) {
-      r.fail(fmt::format("feature {} has a non-finite position", i));
+    if (!std::isfinite(k.pt.x) || !std::isfinite(k.pt.y) || !std::isfinite(k.size) ||
+        !std::isfinite(k.angle) || !std::isfinite(k.response)) {
+      r.fail(fmt::format("feature {} has a non-finite position, size, angle or response", i));
     }
     if (k.octave < 0 || k.octave >= static_cast<int>(levels)) {
       r.fail(fmt::format("feature {} is on pyramid level {} of {}", i, k.octave, levels));
@@ -187,23 +229,62 @@ std::shared_ptr<FrameFeatures> read_features(Reader& r, const MapFileInfo& info)
     }
   }
   f->u_right.resize(n);
-  for (std::size_t i = 0; i < n; ++i) f->u_right[i] = r.get<float>();
+  for (std::size_t i = 0; i < n; ++i) {
+    f->u_right[i] = r.get<float>();
+    if (!std::isfinite(f->u_right[i]))
+      r.fail(fmt::format("feature {} has u_right {}", i, f->u_right[i]));
+  }
   f->grid = features::FeatureGrid(f->keypoints,
                                   cv::Rect2f(0.0f, 0.0f, static_cast<float>(info.image_width),
                                              static_cast<float>(info.image_height)));
   return f;
 }
 
+/// The image of a PNG block (empty for 0 bytes); `type` is what it must decode to.
+cv::Mat read_png(Reader& r, const MapFileInfo& info, int type, const char* what) {
+  const std::size_t bytes = r.count(r.get<std::uint32_t>(), 1, what);
+  if (bytes == 0) return {};
+  const unsigned char* data = r.take(bytes);
+  const cv::Mat encoded(1, static_cast<int>(bytes), CV_8UC1, const_cast<unsigned char*>(data));
+  cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+  if (image.empty() || image.type() != type || image.cols != info.image_width ||
+      image.rows != info.image_height) {
+    r.fail(fmt::format("its {} is not a {}x{} {} PNG", what, info.image_width, info.image_height,
+                       type == CV_16UC1 ? "16-bit" : "8-bit"));
+  }
+  return image;
+}
+
 }  // namespace
 
-void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path) {
-  std::vector<KeyFramePtr> keyframes = map.keyframes();
-  const std::vector<MapPointPtr> points = map.map_points();
-  // The origin first: the loader's map makes its first keyframe the origin.
+void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path,
+                   const KeyFrameImagesFn& images) {
+  // The keyframes of the spanning tree: the origin and those whose parent chain reaches it.
+  // Left out are keyframes local mapping never took in (no parent yet: still queued when a worker
+  // failed), with whatever hangs below them.
+  std::vector<KeyFramePtr> candidates = map.keyframes();
+  std::set<KeyFrameId> stored;
+  for (const KeyFramePtr& kf : candidates) {
+    if (kf->is_origin()) stored.insert(kf->id());
+  }
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (const KeyFramePtr& kf : candidates) {
+      const KeyFramePtr parent = kf->parent();
+      if (stored.count(kf->id()) == 0 && parent && stored.count(parent->id()) > 0) {
+        stored.insert(kf->id());
+        grew = true;
+      }
+    }
+  }
+  std::vector<KeyFramePtr> keyframes;
+  for (const KeyFramePtr& kf : candidates) {
+    if (stored.count(kf->id()) > 0) keyframes.push_back(kf);
+  }
+  // The origin first (the lowest id): the loader's map makes its first keyframe the origin.
   std::stable_partition(keyframes.begin(), keyframes.end(),
                         [](const KeyFramePtr& kf) { return kf->is_origin(); });
-  std::set<KeyFrameId> stored;
-  for (const KeyFramePtr& kf : keyframes) stored.insert(kf->id());
+  const std::vector<MapPointPtr> points = map.map_points();
 
   Writer w;
   w.put_bytes(reinterpret_cast<const unsigned char*>(kMagic), sizeof(kMagic));
@@ -219,7 +300,7 @@ void save_map_file(const Map& map, const MapFileInfo& info, const std::string& p
   // The point count is known once the points without a stored observation are left out.
   const std::size_t point_count_at = w.bytes().size();
   w.put<std::uint64_t>(0);
-  for (const KeyFramePtr& kf : keyframes) write_keyframe(w, *kf, stored);
+  for (const KeyFramePtr& kf : keyframes) write_keyframe(w, *kf, stored, images, info);
 
   std::uint64_t point_count = 0;
   for (const MapPointPtr& p : points) {
@@ -230,9 +311,13 @@ void save_map_file(const Map& map, const MapFileInfo& info, const std::string& p
     if (observations.empty()) continue;
     const KeyFramePtr reference = p->reference_keyframe();
     w.put<std::uint64_t>(p->id());
-    w.put<std::uint64_t>(reference && stored.count(reference->id()) > 0
-                             ? reference->id()
-                             : observations.front().keyframe->id());
+    const bool reference_observes =
+        reference && std::any_of(observations.begin(), observations.end(),
+                                 [&](const MapPoint::Observation& obs) {
+                                   return obs.keyframe->id() == reference->id();
+                                 });
+    w.put<std::uint64_t>(reference_observes ? reference->id()
+                                            : observations.front().keyframe->id());
     const Vec3d p_w = p->position_w();
     for (int i = 0; i < 3; ++i) w.put<double>(p_w[i]);
     w.put<std::int32_t>(p->visible_count());
@@ -248,7 +333,9 @@ void save_map_file(const Map& map, const MapFileInfo& info, const std::string& p
   std::memcpy(w.bytes().data() + point_count_at, &point_count, sizeof(point_count));
   while (w.bytes().size() % 8 != 0) w.put<std::uint8_t>(0);
   w.put<std::uint64_t>(checksum64(w.bytes().data(), w.bytes().size()));
-  write_file_atomically(path, w.bytes().data(), w.bytes().size(), "the sparse map");
+  write_file_atomically(
+      path, "the sparse map",
+      std::string_view(reinterpret_cast<const char*>(w.bytes().data()), w.bytes().size()));
 }
 
 MapFileContents load_map_file(const std::string& path, Map& map,
@@ -296,7 +383,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
   }
   if (accept) accept(info);
   const auto origin_id = r.get<std::uint64_t>();
-  constexpr std::size_t kMinKeyFrameBytes = 8 + 8 + 56 + 8 + 4 + 4 + 8 + 4;
+  constexpr std::size_t kMinKeyFrameBytes = 8 + 8 + 56 + 8 + 4 + 4 + 8 + 4 + 8;
   constexpr std::size_t kMinPointBytes = 8 + 8 + 24 + 4 + 4 + 4;
   const std::size_t keyframe_count =
       r.count(r.get<std::uint64_t>(), kMinKeyFrameBytes, "keyframes");
@@ -311,7 +398,9 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     r.set_record(fmt::format("keyframe {} of {}", k + 1, keyframe_count));
     const auto id = r.get<std::uint64_t>();
     r.set_record(fmt::format("keyframe {} of {} (id {})", k + 1, keyframe_count, id));
+    if (id >= kMaxId) r.fail("id out of range");
     if (keyframes.count(id) > 0) r.fail("duplicate keyframe id");
+    if (k > 0 && id <= origin_id) r.fail(fmt::format("id below the origin's, {}", origin_id));
     if (k == 0 && id != origin_id) {
       r.fail(fmt::format("the first keyframe must be the origin, id {}", origin_id));
     }
@@ -328,6 +417,13 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     const std::size_t loops = r.count(r.get<std::uint32_t>(), 8, "loop edges");
     for (std::size_t i = 0; i < loops; ++i) loop_edges[id].push_back(r.get<std::uint64_t>());
     std::shared_ptr<FrameFeatures> features = read_features(r, info);
+    const cv::Mat depth_units = read_png(r, info, CV_16UC1, "depth image");
+    const cv::Mat mask = read_png(r, info, CV_8UC1, "dynamic mask");
+    if (!depth_units.empty()) {
+      KeyFrameImages& images = contents.images[id];
+      depth_units.convertTo(images.depth_m, CV_32FC1, 1.0 / kDepthUnitsPerMetre);
+      images.dynamic_mask = mask;
+    }
     auto kf = std::make_shared<KeyFrame>(id, timestamp_s, std::move(features),
                                          SE3(Quatd(q[3], q[0], q[1], q[2]), t));
     keyframes[id] = kf;
@@ -346,6 +442,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     PointRecord p;
     p.id = r.get<std::uint64_t>();
     r.set_record(fmt::format("map point {} of {} (id {})", k + 1, points, p.id));
+    if (p.id >= kMaxId) r.fail("id out of range");
     if (!point_ids.insert(p.id).second) r.fail("duplicate map point id");
     p.reference_id = r.get<std::uint64_t>();
     if (keyframes.count(p.reference_id) == 0) {
@@ -361,6 +458,11 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     }
     const std::size_t n = r.count(r.get<std::uint32_t>(), 13, "observations");
     if (n == 0) r.fail("no observation");
+    if (n > std::min(kMaxObservations, keyframe_count)) {
+      r.fail(fmt::format("{} observations (at most one per keyframe, {} in all)", n,
+                         std::min(kMaxObservations, keyframe_count)));
+    }
+    std::set<KeyFrameId> observers;
     for (std::size_t i = 0; i < n; ++i) {
       const auto kf_id = r.get<std::uint64_t>();
       const auto index = r.get<std::uint32_t>();
@@ -373,10 +475,15 @@ MapFileContents load_map_file(const std::string& path, Map& map,
                            it->second->features().size()));
       }
       if (stereo > 1) r.fail(fmt::format("stereo flag {}", stereo));
+      if (!observers.insert(kf_id).second)
+        r.fail(fmt::format("observed twice by keyframe {}", kf_id));
       if (!used_slots.insert({kf_id, index}).second) {
         r.fail(fmt::format("feature {} of keyframe {} holds another point already", index, kf_id));
       }
       p.observations.push_back({kf_id, index, stereo == 1});
+    }
+    if (observers.count(p.reference_id) == 0) {
+      r.fail(fmt::format("its reference keyframe {} does not observe it", p.reference_id));
     }
     next_point_id = std::max(next_point_id, p.id + 1);
     records.push_back(std::move(p));
@@ -389,8 +496,19 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     r.fail(fmt::format("{} unexpected bytes after the last map point", rest));
   }
   for (const auto& [id, parent] : parents) {
+    if (id == origin_id ? parent != kNoParent : parent == kNoParent) {
+      r.fail(fmt::format("keyframe {}: {}", id,
+                         id == origin_id ? "the origin has a parent" : "no parent"));
+    }
     if (parent != kNoParent && keyframes.count(static_cast<KeyFrameId>(parent)) == 0) {
       r.fail(fmt::format("keyframe {}: parent {} is not in the file", id, parent));
+    }
+    // The spanning tree: every parent chain ends at the origin.
+    std::set<KeyFrameId> chain{id};
+    for (std::int64_t up = parent; up != kNoParent; up = parents[static_cast<KeyFrameId>(up)]) {
+      if (!chain.insert(static_cast<KeyFrameId>(up)).second) {
+        r.fail(fmt::format("keyframe {}: its parents form a cycle", id));
+      }
     }
     for (KeyFrameId other : loop_edges[id]) {
       if (keyframes.count(other) == 0) {
@@ -410,13 +528,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
   }
   for (const KeyFramePtr& kf : order) {
     const std::int64_t parent = parents[kf->id()];
-    // The origin, and a keyframe whose parent was not stored, take none here; update_connections
-    // gives the latter its strongest covisible, as for a new keyframe.
-    if (parent != kNoParent) {
-      kf->set_parent(keyframes[static_cast<KeyFrameId>(parent)]);
-    } else if (kf->id() == origin_id) {
-      kf->set_parent(nullptr);
-    }
+    kf->set_parent(parent == kNoParent ? nullptr : keyframes[static_cast<KeyFrameId>(parent)]);
     for (KeyFrameId other : loop_edges[kf->id()]) kf->add_loop_edge(keyframes[other]);
   }
   for (const PointRecord& rec : records) {

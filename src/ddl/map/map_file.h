@@ -6,8 +6,8 @@
 // What is not stored is rebuilt on load: the feature grid and scale pyramid of each keyframe, the
 // covisibility graph (KeyFrame::update_connections from the observations), each point's
 // descriptor, normal and distance range; the bags of words need the vocabulary and are computed
-// by the caller (pipeline::System::load_map). Dense data (depth images, the octree) is not part
-// of the file.
+// by the caller (pipeline::System::load_map). The keyframes' depth images and dynamic masks are
+// stored when the caller has them (KeyFrameImagesFn); colour images and the octree are not.
 //
 // Layout (little-endian, version 1): a 96-byte header, the keyframes and points in id order,
 // zero padding to a multiple of 8 bytes, and a u64 checksum of every preceding byte
@@ -17,6 +17,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "ddl/map/map.h"
@@ -32,17 +35,29 @@ struct MapFileInfo {
   std::uint64_t vocabulary_words = 0;  // word count of the vocabulary the map was built with
 };
 
+/// A keyframe's images stored beside it (the references of the multi-view geometry check).
+struct KeyFrameImages {
+  cv::Mat depth_m;       // CV_32FC1 metres, 0 = none; stored at 1/5000 m (TUM's 16-bit PNG)
+  cv::Mat dynamic_mask;  // CV_8UC1, non-zero = dynamic; empty = nothing marked
+};
+/// The images of a keyframe to store, or none.
+using KeyFrameImagesFn = std::function<std::optional<KeyFrameImages>(KeyFrameId)>;
+
 /// What load_map_file() read.
 struct MapFileContents {
   MapFileInfo info;
   std::size_t keyframes = 0;
   std::size_t map_points = 0;
+  std::map<KeyFrameId, KeyFrameImages> images;  // of the keyframes stored with images
 };
 
-/// Writes the good keyframes and points of `map` (atomically: through a temporary file and a
-/// rename). Observations of keyframes that are not stored are left out. Throws ddl::OutputError
-/// naming the file when it cannot be written.
-void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path);
+/// Writes the good keyframes and points of `map`, whole or not at all (write_file_atomically:
+/// through `<path>.partial` and a rename; the folder is created). Observations of keyframes that
+/// are not stored are left out. Throws ddl::OutputError naming the file when it cannot be written.
+/// `images`, when given, supplies the keyframes' depth images and masks (each a 16-bit and an
+/// 8-bit PNG in the file; a keyframe without is stored without).
+void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path,
+                   const KeyFrameImagesFn& images = {});
 
 /// Fills `map`, which must be empty and never have held anything (ddl::Error otherwise), with
 /// the file's keyframes and points and raises its id counters past theirs. The first keyframe of

@@ -182,6 +182,13 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclu
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }
 
+std::optional<map::KeyFrameImages> DynamicFrontEnd::keyframe_images(map::KeyFrameId id) const {
+  std::lock_guard lock(cache_mutex_);
+  const auto it = depth_cache_.find(id);
+  if (it == depth_cache_.end()) return std::nullopt;
+  return map::KeyFrameImages{it->second.depth_m, it->second.dynamic_mask};
+}
+
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
                                         const cv::Mat& dynamic_mask) {
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);

@@ -21,6 +21,7 @@
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/io/rgbd_frame.h"
 #include "ddl/map/keyframe.h"
+#include "ddl/map/map_file.h"
 #include "ddl/pipeline/system_config.h"
 #include "ddl/segmentation/segmenter.h"
 
@@ -124,6 +125,8 @@ class DynamicFrontEnd {
   /// With the dynamic memory on, also its static veto view (`dynamic_mask`: the combined mask).
   void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
                          const cv::Mat& dynamic_mask);
+  /// The cached depth image and mask of a keyframe (for the map file), if the cache holds it.
+  std::optional<map::KeyFrameImages> keyframe_images(map::KeyFrameId id) const;
 
  private:
   /// The turn that makes `frame` upright for the CNN, when one is configured and needed.

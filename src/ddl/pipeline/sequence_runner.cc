@@ -88,6 +88,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"keyframes_created", s.keyframes_created},
           {"keyframes_loaded", s.keyframes_loaded},
           {"map_points_loaded", s.map_points_loaded},
+          {"keyframe_depth_images_loaded", s.keyframe_depth_images_loaded},
           {"keyframes", s.keyframes},
           {"map_points", s.map_points},
           {"loops_closed", s.loops_closed},
@@ -299,7 +300,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   }
   if (masks != nullptr) summary["masks"] = masks->to_json();
   if (camera_written) summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
-  if (sparse_map_written) summary["outputs"]["sparse_map"] = options.save_map_path;
+  // Not under "outputs", which lists the files of the output folder (removed by the next run in
+  // it): the map may lie anywhere, and may be the one this run loaded.
+  if (sparse_map_written) {
+    summary["sparse_map"] =
+        std::filesystem::absolute(options.save_map_path).lexically_normal().string();
+  }
   if (keyframes_written) {
     summary["outputs"]["keyframe_trajectory"] = keyframe_path.filename().string();
   }

@@ -38,7 +38,7 @@ struct RunOptions {
   /// before any output is written or removed.
   std::string load_map_path;
   /// Non-empty: where the sparse map is written at the end (System::save_map), also when the
-  /// run is interrupted or fails in a frame; summary["outputs"]["sparse_map"] names it.
+  /// run is interrupted or fails in a frame; summary["sparse_map"] names it (absolute path).
   std::string save_map_path;
   /// When set and dynamic removal is on: fed every frame's masks; its JSON becomes
   /// summary["masks"] (MaskEvaluator::open gives one for sequences with ground-truth masks).

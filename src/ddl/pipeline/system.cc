@@ -232,11 +232,16 @@ map::MapFileContents System::load_map(const std::string& path) {
                            bow, feature_vector);
     keyframe->set_bow(std::move(bow), std::move(feature_vector));
     database_->add(keyframe->id(), keyframe->bow());
+    // The stored depth images become the geometry check's references again.
+    if (const auto it = contents.images.find(keyframe->id()); it != contents.images.end()) {
+      dynamic_->remember_keyframe(keyframe, it->second.depth_m, it->second.dynamic_mask);
+    }
   }
   tracker_->start_in_loaded_map();
   map_loaded_ = true;
   stats_.keyframes_loaded = contents.keyframes;
   stats_.map_points_loaded = contents.map_points;
+  stats_.keyframe_depth_images_loaded = contents.images.size();
   spdlog::info("{}: map loaded, {} keyframes and {} map points", path, contents.keyframes,
                contents.map_points);
   return contents;
@@ -252,7 +257,8 @@ void System::save_map(const std::string& path) const {
   info.cy = camera_.cy;
   info.descriptor_tag = vocabulary_->descriptor_tag();
   info.vocabulary_words = vocabulary_->word_count();
-  map::save_map_file(*map_, info, path);
+  map::save_map_file(*map_, info, path,
+                     [this](map::KeyFrameId id) { return dynamic_->keyframe_images(id); });
 }
 
 FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn) {

@@ -66,10 +66,11 @@ struct SystemStatistics {
   std::size_t relocalizations_in_same_frame = 0;  // of them: the frame whose tracking failed
   std::size_t frames_with_motion_prior = 0;       // tracked with the motion model's prior
   std::size_t keyframes_created = 0;
-  std::size_t keyframes_loaded = 0;   // from the map file (load_map)
-  std::size_t map_points_loaded = 0;  // ... and its points
-  std::size_t keyframes = 0;          // alive in the map at the end
-  std::size_t map_points = 0;         // alive in the map at the end
+  std::size_t keyframes_loaded = 0;              // from the map file (load_map)
+  std::size_t map_points_loaded = 0;             // ... and its points
+  std::size_t keyframe_depth_images_loaded = 0;  // ... and keyframe depth images (geometry check)
+  std::size_t keyframes = 0;                     // alive in the map at the end
+  std::size_t map_points = 0;                    // alive in the map at the end
   std::size_t loops_closed = 0;
   std::size_t map_resets = 0;
   std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose

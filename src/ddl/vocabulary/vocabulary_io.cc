@@ -25,6 +25,7 @@
 
 #include "ddl/core/binary_file.h"
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/vocabulary/vocabulary.h"
 
 namespace ddl::vocabulary {
@@ -116,7 +117,9 @@ void Vocabulary::save(const std::string& path) const {
   }
   write_at<std::uint64_t>(p + payload, checksum64(p, payload));
 
-  write_file_atomically(path, p, payload + kChecksumBytes, "the vocabulary");
+  write_file_atomically(
+      path, "the vocabulary",
+      std::string_view(reinterpret_cast<const char*>(p), payload + kChecksumBytes));
 }
 
 Vocabulary Vocabulary::load(const std::string& path) {
