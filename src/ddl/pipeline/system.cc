@@ -223,6 +223,7 @@ map::MapFileContents System::load_map(const std::string& path) {
                             camera_.cx, camera_.cy));
     }
   };
+  const Stopwatch watch;
   const map::MapFileContents contents = map::load_map_file(path, *map_, accept);
   if (contents.keyframes == 0) throw InputError::at(path, "the map holds no keyframe");
   for (const map::KeyFramePtr& keyframe : map_->keyframes()) {
@@ -242,7 +243,8 @@ map::MapFileContents System::load_map(const std::string& path) {
   stats_.keyframes_loaded = contents.keyframes;
   stats_.map_points_loaded = contents.map_points;
   stats_.keyframe_depth_images_loaded = contents.images.size();
-  spdlog::info("{}: map loaded, {} keyframes and {} map points", path, contents.keyframes,
+  spdlog::info("{}: map loaded in {:.0f} ms: {} keyframes ({} with depth images), {} map points",
+               path, watch.elapsed_ms(), contents.keyframes, contents.images.size(),
                contents.map_points);
   return contents;
 }
@@ -257,8 +259,10 @@ void System::save_map(const std::string& path) const {
   info.cy = camera_.cy;
   info.descriptor_tag = vocabulary_->descriptor_tag();
   info.vocabulary_words = vocabulary_->word_count();
+  const Stopwatch watch;
   map::save_map_file(*map_, info, path,
                      [this](map::KeyFrameId id) { return dynamic_->keyframe_images(id); });
+  spdlog::info("{}: sparse map written in {:.0f} ms", path, watch.elapsed_ms());
 }
 
 FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn) {
