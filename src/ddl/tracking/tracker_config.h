@@ -105,9 +105,9 @@ struct TrackerConfig {
   int init_min_depth_features = 100;        // ... and this many of them with depth (map points)
   int reset_when_lost_max_keyframes = 5;    // lost with <= this many keyframes: reset the map
                                             // (-1: never reset)
-  /// Track against a map loaded from a file (`run --load-map`) without changing it: no keyframe
+  /// Track against a map loaded from a file (`run --load-map`) without adding to it: no keyframe
   /// is created, so local mapping and loop closing have nothing to do (ORB-SLAM2's localization
-  /// mode). Needs a loaded map.
+  /// mode; only the points' match counters count on). Needs a loaded map.
   bool localization_only = false;
 
   /// Throws ddl::ConfigError naming the key ("tracking.matching.motion_min_matches", ...).
