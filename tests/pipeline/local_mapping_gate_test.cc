@@ -42,6 +42,22 @@ TEST(LocalMappingGate, APauseWaitsUntilEveryQueuedKeyframeIsProcessed) {
   gate.resume();
 }
 
+// Tracking's "mapping idle": false from the moment a keyframe is queued until the worker has
+// processed it, also between the worker taking it off the queue and beginning it.
+TEST(LocalMappingGate, MappingIsIdleOnlyWithNoKeyframeQueuedOrInProgress) {
+  LocalMappingGate gate;
+  EXPECT_TRUE(gate.mapping_idle());
+  queue_keyframe(gate);
+  EXPECT_FALSE(gate.mapping_idle());  // queued (or taken off the queue, not yet begun)
+  gate.begin_keyframe();
+  EXPECT_FALSE(gate.mapping_idle());  // in progress
+  gate.end_keyframe();
+  EXPECT_TRUE(gate.mapping_idle());
+  queue_keyframe(gate);
+  gate.worker_exited();
+  EXPECT_FALSE(gate.mapping_idle());  // nobody will process it
+}
+
 TEST(LocalMappingGate, TrackingCreatesNoKeyframeWhileAStopIsRequested) {
   LocalMappingGate gate;
   gate.pause();

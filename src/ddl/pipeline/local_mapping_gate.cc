@@ -24,6 +24,11 @@ void LocalMappingGate::close_insertion(bool queued_keyframe) {
   changed_.notify_all();
 }
 
+bool LocalMappingGate::mapping_idle() const {
+  std::lock_guard lock(mutex_);
+  return !worker_exited_ && !in_progress_ && taken_ >= pushed_;
+}
+
 void LocalMappingGate::begin_keyframe() {
   std::unique_lock lock(mutex_);
   changed_.wait(lock, [&] { return stops_granted_ == 0; });

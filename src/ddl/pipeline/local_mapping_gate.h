@@ -42,6 +42,12 @@ class LocalMappingGate {
   void end_keyframe();
   /// The worker will take no more keyframes; a pause no longer waits for the queue.
   void worker_exited();
+  /// Whether every keyframe queued so far is processed and none is in progress: tracking's
+  /// "mapping accepts keyframes" (ORB-SLAM2 AcceptKeyFrames). Counted under the gate's mutex, so a
+  /// keyframe the worker has taken off the queue but not yet begun counts as work (until stop 30
+  /// System read the queue's size and a busy flag the worker set after taking it, which left a
+  /// moment in which a keyframe in flight looked idle). False once the worker has exited.
+  bool mapping_idle() const;
   /// Polled by local BA: raised when a newer keyframe is queued or loop closing asks to stop.
   const std::atomic<bool>* abort_flag() const { return &abort_local_ba_; }
 

@@ -305,7 +305,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (threaded) {
     status.stopped = !insertion.allowed();
     status.queued_keyframes = mapping_queue_->size();
-    status.accepts_keyframes = status.queued_keyframes == 0 && !mapper_busy_.load();
+    status.accepts_keyframes = mapping_gate_.mapping_idle();
   } else {
     status.accepts_keyframes = frames_since_keyframe_ >= config_.deterministic_mapping_busy_frames;
   }
@@ -434,17 +434,14 @@ void System::handle_keyframe_inline(const map::KeyFramePtr& keyframe) {
 void System::mapping_worker() {
   try {
     while (auto keyframe = mapping_queue_->pop()) {
-      mapper_busy_.store(true);
       mapping_gate_.begin_keyframe();
       Stopwatch watch;
       map::KeyFramePtr kept = mapper_->process(*keyframe, mapping_gate_.abort_flag());
       record_local_mapping(watch.elapsed_ms());
       mapping_gate_.end_keyframe();
-      mapper_busy_.store(false);
       if (kept && !loop_queue_->push(kept)) break;
     }
   } catch (...) {
-    mapper_busy_.store(false);
     store_error(std::current_exception());
   }
   mapping_gate_.worker_exited();

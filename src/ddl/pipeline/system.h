@@ -191,7 +191,6 @@ class System {
   // Threaded mode only.
   std::unique_ptr<BoundedQueue<map::KeyFramePtr>> mapping_queue_;
   std::unique_ptr<BoundedQueue<map::KeyFramePtr>> loop_queue_;
-  std::atomic<bool> mapper_busy_{false};
   // Stop handshake of tracking, local mapping and loop closing (LoopCloser::MappingPause).
   LocalMappingGate mapping_gate_;
   std::thread mapping_thread_;
