@@ -151,7 +151,9 @@ TEST(MapFile, ALoadedMapHoldsTheSavedKeyframesPointsAndTree) {
     const map::KeyFramePtr pa = a[k]->parent();
     const map::KeyFramePtr pb = b[k]->parent();
     ASSERT_EQ(pa == nullptr, pb == nullptr);
-    if (pa) EXPECT_EQ(pa->id(), pb->id());
+    if (pa) {
+      EXPECT_EQ(pa->id(), pb->id());
+    }
     // The covisibility graph is rebuilt from the observations: every keyframe but a lone one
     // has links again.
     EXPECT_FALSE(b[k]->covisibles().empty());

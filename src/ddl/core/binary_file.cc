@@ -1,13 +1,14 @@
 #include "ddl/core/binary_file.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
-#include <memory>
 
 #include "ddl/core/error.h"
 
@@ -25,13 +26,6 @@ std::uint64_t word_at(const unsigned char* p) {
   return value;
 }
 
-struct FileCloser {
-  void operator()(std::FILE* f) const {
-    if (f != nullptr) std::fclose(f);
-  }
-};
-using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
-
 }  // namespace
 
 std::uint64_t checksum64(const unsigned char* data, std::size_t size) {
@@ -48,19 +42,34 @@ std::uint64_t checksum64(const unsigned char* data, std::size_t size) {
   return h;
 }
 
-std::vector<unsigned char> read_whole_file(const std::string& path) {
+MappedFile::MappedFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
+  if (::fstat(fd, &st) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::close(fd);
+    throw InputError::at(path, fmt::format("cannot stat: {}", reason));
   }
-  if (!S_ISREG(st.st_mode)) throw InputError::at(path, "not a regular file");
-  FilePtr file(std::fopen(path.c_str(), "rb"));
-  if (!file) throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(st.st_size));
-  if (!bytes.empty() && std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) {
-    throw InputError::at(path, fmt::format("cannot read all {} bytes", bytes.size()));
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw InputError::at(path, "not a regular file");
   }
-  return bytes;
+  size_ = static_cast<std::size_t>(st.st_size);
+  if (size_ > 0) {
+    void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    if (p == MAP_FAILED) {
+      const std::string reason = std::strerror(errno);
+      ::close(fd);
+      throw InputError::at(path, fmt::format("cannot map: {}", reason));
+    }
+    data_ = static_cast<const unsigned char*>(p);
+  }
+  ::close(fd);
+}
+
+MappedFile::~MappedFile() {
+  if (data_ != nullptr) ::munmap(const_cast<unsigned char*>(data_), size_);
 }
 
 }  // namespace ddl

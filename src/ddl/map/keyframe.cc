@@ -36,6 +36,14 @@ void KeyFrame::set_bow(vocabulary::BowVector bow, vocabulary::FeatureVector feat
   if (!bow_) bow_ = std::make_unique<const Bow>(Bow{std::move(bow), std::move(feature_vector)});
 }
 
+void KeyFrame::compute_bow(const vocabulary::Vocabulary& vocabulary, int levels_up) {
+  if (has_bow() || vocabulary.empty()) return;
+  vocabulary::BowVector bow;
+  vocabulary::FeatureVector feature_vector;
+  vocabulary.transform(features_->descriptors, levels_up, bow, feature_vector);
+  set_bow(std::move(bow), std::move(feature_vector));
+}
+
 SE3 KeyFrame::T_c_w() const {
   std::lock_guard lock(pose_mutex_);
   return T_c_w_;

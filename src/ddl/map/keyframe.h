@@ -17,6 +17,7 @@
 #include "ddl/map/frame_features.h"
 #include "ddl/map/ids.h"
 #include "ddl/map/map_point.h"
+#include "ddl/vocabulary/vocabulary.h"
 
 namespace ddl::map {
 
@@ -40,6 +41,10 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   bool has_bow() const { return !bow().empty(); }
   /// Stores the BoW of a keyframe whose features came without one; no-op when it has one.
   void set_bow(vocabulary::BowVector bow, vocabulary::FeatureVector feature_vector);
+  /// Computes and stores the BoW with `vocabulary` (direct index `levels_up` levels above the
+  /// words) unless the keyframe has one or the vocabulary is empty (local mapping for keyframes
+  /// created without one; keyframes loaded from a map file).
+  void compute_bow(const vocabulary::Vocabulary& vocabulary, int levels_up);
 
   // --- pose -----------------------------------------------------------------------------------
   SE3 T_c_w() const;

@@ -164,7 +164,8 @@ void write_keyframe(Writer& w, const KeyFrame& kf, const std::set<KeyFrameId>& s
     for (float v : {k.pt.x, k.pt.y, k.size, k.angle, k.response}) w.put<float>(v);
     w.put<std::int32_t>(k.octave);
   }
-  for (std::size_t i = 0; i < n; ++i) w.put_bytes(f.descriptors.ptr(static_cast<int>(i)), 32);
+  for (std::size_t i = 0; i < n; ++i)
+    w.put_bytes(f.descriptors.ptr(static_cast<int>(i)), kDescriptorBytes);
   for (std::size_t i = 0; i < n; ++i) w.put<float>(f.depth_m[i]);
   for (std::size_t i = 0; i < n; ++i) w.put<float>(f.u_right.empty() ? -1.0f : f.u_right[i]);
   write_images(w, images ? images(kf.id()) : std::nullopt, info);
@@ -343,7 +344,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
   if (map.keyframe_count() != 0 || map.map_point_count() != 0) {
     throw Error(fmt::format("{}: a map file is loaded into an empty map only", path));
   }
-  const std::vector<unsigned char> bytes = read_whole_file(path);
+  const MappedFile bytes(path);
   if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
     throw InputError::at(path, "not a DDL-SLAM map file (wrong magic; expected \"DDLSMAP\")");
   }

@@ -55,13 +55,7 @@ void LocalMapper::apply_pending_reset() {
 }
 
 bool LocalMapper::insert_keyframe(const map::KeyFramePtr& keyframe) {
-  if (!keyframe->has_bow() && !vocabulary_->empty()) {
-    vocabulary::BowVector bow;
-    vocabulary::FeatureVector feature_vector;
-    vocabulary_->transform(keyframe->features().descriptors, config_.bow_levels_up, bow,
-                           feature_vector);
-    keyframe->set_bow(std::move(bow), std::move(feature_vector));
-  }
+  keyframe->compute_bow(*vocabulary_, config_.bow_levels_up);
   // Points tracked by the frame become observations of the keyframe; points the tracker created
   // for this keyframe (already observing it) go on probation (ORB-SLAM2 ProcessNewKeyFrame).
   const map::FrameFeatures& features = keyframe->features();

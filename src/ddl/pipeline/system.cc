@@ -227,11 +227,7 @@ map::MapFileContents System::load_map(const std::string& path) {
   const map::MapFileContents contents = map::load_map_file(path, *map_, accept);
   if (contents.keyframes == 0) throw InputError::at(path, "the map holds no keyframe");
   for (const map::KeyFramePtr& keyframe : map_->keyframes()) {
-    vocabulary::BowVector bow;
-    vocabulary::FeatureVector feature_vector;
-    vocabulary_->transform(keyframe->features().descriptors, config_.tracking.frame.bow_levels_up,
-                           bow, feature_vector);
-    keyframe->set_bow(std::move(bow), std::move(feature_vector));
+    keyframe->compute_bow(*vocabulary_, config_.tracking.frame.bow_levels_up);
     database_->add(keyframe->id(), keyframe->bow());
     // The stored depth images become the geometry check's references again.
     if (const auto it = contents.images.find(keyframe->id()); it != contents.images.end()) {

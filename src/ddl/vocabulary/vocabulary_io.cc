@@ -11,15 +11,9 @@
 //  40  N x 40  nodes: u32 parent (0xFFFFFFFF for the root), u8[32] descriptor, f32 weight
 //  40+40N u64  checksum of every preceding byte
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <bit>
-#include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <memory>
 
@@ -51,48 +45,6 @@ template <typename T>
 void write_at(unsigned char* p, T value) {
   std::memcpy(p, &value, sizeof(T));
 }
-
-// A read-only memory map of a whole file: the page cache is read in place, with no buffer to
-// allocate and fill (the load cost of a large vocabulary is mostly memory traffic).
-class MappedFile {
- public:
-  explicit MappedFile(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw InputError::at(path, fmt::format("cannot open: {}", std::strerror(errno)));
-    struct stat st {};
-    if (::fstat(fd, &st) != 0) {
-      const std::string reason = std::strerror(errno);
-      ::close(fd);
-      throw InputError::at(path, fmt::format("cannot stat: {}", reason));
-    }
-    if (!S_ISREG(st.st_mode)) {
-      ::close(fd);
-      throw InputError::at(path, "not a regular file");
-    }
-    size_ = static_cast<std::size_t>(st.st_size);
-    if (size_ > 0) {
-      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-      if (p == MAP_FAILED) {
-        const std::string reason = std::strerror(errno);
-        ::close(fd);
-        throw InputError::at(path, fmt::format("cannot map: {}", reason));
-      }
-      data_ = static_cast<const unsigned char*>(p);
-    }
-    ::close(fd);
-  }
-  ~MappedFile() {
-    if (data_ != nullptr) ::munmap(const_cast<unsigned char*>(data_), size_);
-  }
-  MappedFile(const MappedFile&) = delete;
-  MappedFile& operator=(const MappedFile&) = delete;
-  const unsigned char* data() const { return data_; }
-  std::size_t size() const { return size_; }
-
- private:
-  const unsigned char* data_ = nullptr;
-  std::size_t size_ = 0;
-};
 
 }  // namespace
 
