@@ -23,34 +23,41 @@ namespace {
 TEST(DenseMapper, LeavesTheSubmittedImagesAndMaskUntouched) {
   const camera::PinholeCamera camera = synthetic::tum3_camera();
   for (const bool inpainting : {false, true}) {
-    auto map = std::make_shared<map::Map>();
-    DenseMapperConfig config;
-    config.inpainting_enabled = inpainting;
-    config.octomap_enabled = true;
-    config.mask_border_px = 12;
-    DenseMapper dense(config, camera, map);
-    for (int k = 0; k < 3; ++k) {
-      const SE3 T_c_w(Mat3d::Identity(), Vec3d(0.05 * k, 0.0, 0.0));
-      auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
-                                                std::make_shared<map::FrameFeatures>(), T_c_w);
-      map->add_keyframe(kf);
-      cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40, 80, 120));
-      cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
-      cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
-      cv::rectangle(mask, cv::Rect(200 + 20 * k, 150, 120, 200), cv::Scalar(255), cv::FILLED);
-      depth.setTo(1.2f, mask);
-      const cv::Mat bgr_before = bgr.clone();
-      const cv::Mat depth_before = depth.clone();
-      const cv::Mat mask_before = mask.clone();
-      dense.submit({kf, bgr, depth, mask});
-      EXPECT_EQ(cv::countNonZero(mask != mask_before), 0) << "inpainting " << inpainting;
-      EXPECT_EQ(cv::countNonZero(depth != depth_before), 0) << "inpainting " << inpainting;
-      cv::Mat diff;
-      cv::absdiff(bgr, bgr_before, diff);
-      EXPECT_EQ(cv::countNonZero(diff.reshape(1)), 0) << "inpainting " << inpainting;
+    for (const bool own_thread : {false, true}) {
+      auto map = std::make_shared<map::Map>();
+      DenseMapperConfig config;
+      config.inpainting_enabled = inpainting;
+      config.octomap_enabled = true;
+      config.mask_border_px = 12;
+      config.deterministic_thread = own_thread;
+      DenseMapper dense(config, camera, map);
+      // Checked after finish(): the stage's thread may still be working at submit()'s return.
+      std::vector<std::pair<cv::Mat, cv::Mat>> images;  // {submitted, copy from before}
+      for (int k = 0; k < 3; ++k) {
+        const SE3 T_c_w(Mat3d::Identity(), Vec3d(0.05 * k, 0.0, 0.0));
+        auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
+                                                  std::make_shared<map::FrameFeatures>(), T_c_w);
+        map->add_keyframe(kf);
+        cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40, 80, 120));
+        cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+        cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+        cv::rectangle(mask, cv::Rect(200 + 20 * k, 150, 120, 200), cv::Scalar(255), cv::FILLED);
+        depth.setTo(1.2f, mask);
+        const cv::Mat bgr_before = bgr.clone();
+        const cv::Mat depth_before = depth.clone();
+        const cv::Mat mask_before = mask.clone();
+        dense.submit({kf, bgr, depth, mask});
+        images.emplace_back(mask, mask_before);
+        images.emplace_back(depth, depth_before);
+        images.emplace_back(bgr.reshape(1), bgr_before.reshape(1));
+      }
+      dense.finish();
+      EXPECT_EQ(dense.stats().keyframes, 3u);
+      for (const auto& [after, before] : images) {
+        EXPECT_EQ(cv::countNonZero(after != before), 0)
+            << "inpainting " << inpainting << ", own thread " << own_thread;
+      }
     }
-    dense.finish();
-    EXPECT_EQ(dense.stats().keyframes, 3u);
   }
 }
 
@@ -162,6 +169,7 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
     DenseMapperConfig config;
     config.inpainting_enabled = false;
     config.octree_delay_keyframes = delay;
+    config.deterministic_thread = false;  // the octree is read before finish()
     DenseMapper dense(config, camera, map);
     std::vector<map::KeyFramePtr> keyframes;
     for (int k = 0; k < 4; ++k) {
@@ -197,6 +205,66 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
   EXPECT_EQ(run(2, {0, 0.005}, false).rebuilds, 0u);
   // At once (delay 0), as before: all four in before finish().
   EXPECT_EQ(run(0, {0, 0.0}, false).scans_before_finish, 4u);
+}
+
+// Deterministic runs give the dense stage a thread of its own (dense.deterministic_thread) but
+// take every pose it reads when the keyframe is submitted: the outputs are those of the inline
+// stage although local BA and loop correction move the keyframes while the thread works. Each
+// keyframe here is moved right after its submission, while the thread is still busy with it.
+TEST(DenseMapper, ItsOwnThreadInADeterministicRunGivesTheInlineOutputs) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  struct Outcome {
+    DenseStats stats;
+    octomap::OctreeStats octree;
+  };
+  // `moves`: keyframes move after their submission (0 = never). `moved_first`: submitted at the
+  // moved poses instead (the outputs a stage reading poses late would risk).
+  const auto run = [&](bool own_thread, double moves, bool moved_first) {
+    auto map = std::make_shared<map::Map>();
+    DenseMapperConfig config;
+    config.deterministic_thread = own_thread;
+    config.octree_delay_keyframes = 2;
+    config.inpainting.num_keyframes = 3;
+    config.inpainting.extra_keyframes = 1;
+    DenseMapper dense(config, camera, map);
+    // The moves alternate in direction, so they change the keyframes' relative poses.
+    const auto pose = [](int k, double shift_m) {
+      const double sign = k % 2 == 0 ? 1.0 : -1.0;
+      return SE3(Mat3d::Identity(), Vec3d(0.05 * k + sign * shift_m, 0.01 * k, 0.0));
+    };
+    std::vector<map::KeyFramePtr> keyframes;
+    for (int k = 0; k < 8; ++k) {
+      auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
+                                                std::make_shared<map::FrameFeatures>(),
+                                                pose(k, moved_first ? moves : 0.0));
+      map->add_keyframe(kf);
+      keyframes.push_back(kf);
+      cv::Mat bgr(camera.height, camera.width, CV_8UC3);
+      cv::randu(bgr, cv::Scalar::all(0), cv::Scalar::all(255));
+      cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f + 0.05f * k));
+      cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+      cv::rectangle(mask, cv::Rect(180 + 25 * k, 140, 140, 200), cv::Scalar(255), cv::FILLED);
+      depth.setTo(1.1f, mask);
+      dense.submit({kf, bgr, depth, mask});
+      // As local BA would, while the stage works on it; every third time as a loop correction.
+      if (!moved_first) kf->set_T_c_w(pose(k, moves));
+      if (k % 3 == 2) map->notify_big_change();
+    }
+    dense.finish();
+    return Outcome{dense.stats(), dense.octree()->stats()};
+  };
+  const Outcome inline_stage = run(false, 0.04, false);
+  const Outcome own_thread = run(true, 0.04, false);
+  EXPECT_GT(inline_stage.stats.filled_pixels, 10000);
+  EXPECT_EQ(own_thread.stats.filled_pixels, inline_stage.stats.filled_pixels);
+  EXPECT_EQ(own_thread.stats.masked_pixels, inline_stage.stats.masked_pixels);
+  EXPECT_EQ(own_thread.stats.octree_rebuilds, inline_stage.stats.octree_rebuilds);
+  EXPECT_EQ(own_thread.octree.scans_integrated, inline_stage.octree.scans_integrated);
+  EXPECT_EQ(own_thread.octree.occupied_leaves, inline_stage.octree.occupied_leaves);
+  EXPECT_EQ(own_thread.octree.free_leaves, inline_stage.octree.free_leaves);
+  // The premise: poses read after the moves give other outputs.
+  const Outcome late = run(false, 0.04, true);
+  EXPECT_NE(late.stats.filled_pixels, inline_stage.stats.filled_pixels);
 }
 
 // Review finding (stop 20): every keyframe stayed stored with its full images (about 3 MB at

@@ -48,7 +48,7 @@ DenseMapper::DenseMapper(const DenseMapperConfig& config, const camera::PinholeC
   if (!config_.save_inpainted_dir.empty()) {
     create_folder(config_.save_inpainted_dir, "the inpainted frames");
   }
-  if (config_.threaded) {
+  if (config_.threaded || config_.deterministic_thread) {
     queue_ = std::make_unique<BoundedQueue<Item>>(config_.queue_capacity);
     thread_ = std::thread([this] { worker(); });
   }
@@ -65,7 +65,45 @@ void DenseMapper::submit(DenseKeyframe keyframe) {
     process(std::move(keyframe));
     return;
   }
-  if (!queue_->push(Item(std::move(keyframe))) && error_) std::rethrow_exception(error_);
+  std::optional<DensePoseSnapshot> snapshot;
+  if (!config_.threaded) {
+    submitted_.push_back(keyframe.keyframe);
+    snapshot = take_snapshot(submitted_);
+  }
+  if (!queue_->push(Item(Submitted{std::move(keyframe), std::move(snapshot)})) && error_) {
+    std::rethrow_exception(error_);
+  }
+}
+
+DensePoseSnapshot DenseMapper::take_snapshot(const std::vector<map::KeyFramePtr>& keyframes) const {
+  DensePoseSnapshot snapshot;
+  map_->read_consistent([&] {
+    snapshot.big_change_index = map_->big_change_index();
+    for (const map::KeyFramePtr& kf : keyframes) {
+      snapshot.T_w_c.emplace(kf->id(), tracking::resolved_T_w_c(kf));
+    }
+  });
+  return snapshot;
+}
+
+int DenseMapper::big_change_index() const {
+  return snapshot_ ? snapshot_->big_change_index : map_->big_change_index();
+}
+
+std::vector<SE3> DenseMapper::poses_of(const std::vector<map::KeyFramePtr>& keyframes) const {
+  std::vector<SE3> poses(keyframes.size());
+  if (snapshot_) {
+    for (std::size_t i = 0; i < keyframes.size(); ++i) {
+      poses[i] = snapshot_->T_w_c.at(keyframes[i]->id());
+    }
+    return poses;
+  }
+  map_->read_consistent([&] {
+    for (std::size_t i = 0; i < keyframes.size(); ++i) {
+      poses[i] = tracking::resolved_T_w_c(keyframes[i]);
+    }
+  });
+  return poses;
 }
 
 void DenseMapper::reset() {
@@ -74,21 +112,32 @@ void DenseMapper::reset() {
     drop_stored();
     return;
   }
-  if (!queue_->push(Item(ResetRequest{})) && error_) std::rethrow_exception(error_);
+  std::optional<DensePoseSnapshot> snapshot;
+  if (!config_.threaded) {
+    submitted_.clear();
+    snapshot = take_snapshot({});
+  }
+  if (!queue_->push(Item(ResetRequest{std::move(snapshot)})) && error_) {
+    std::rethrow_exception(error_);
+  }
 }
 
 void DenseMapper::handle(Item item) {
-  if (auto* keyframe = std::get_if<DenseKeyframe>(&item)) {
-    process(std::move(*keyframe));
+  if (auto* submitted = std::get_if<Submitted>(&item)) {
+    snapshot_ = submitted->snapshot ? &*submitted->snapshot : nullptr;
+    process(std::move(submitted->keyframe));
   } else {
+    auto& reset = std::get<ResetRequest>(item);
+    snapshot_ = reset.snapshot ? &*reset.snapshot : nullptr;
     drop_stored();
   }
+  snapshot_ = nullptr;
 }
 
 void DenseMapper::drop_stored() {
   stored_.clear();
   if (octree_) octree_->clear();
-  seen_big_change_ = map_->big_change_index();
+  seen_big_change_ = big_change_index();
   std::lock_guard lock(stats_mutex_);
   ++stats_.resets;
 }
@@ -135,11 +184,10 @@ std::size_t DenseMapper::integrate_due(std::size_t keep_back) {
     if (!stored_[i].integrated) todo.push_back(i);
   }
   if (todo.empty()) return 0;
-  map_->read_consistent([&] {
-    for (const std::size_t i : todo) {
-      stored_[i].T_w_c_integrated = tracking::resolved_T_w_c(stored_[i].keyframe);
-    }
-  });
+  std::vector<map::KeyFramePtr> keyframes;
+  for (const std::size_t i : todo) keyframes.push_back(stored_[i].keyframe);
+  const std::vector<SE3> poses = poses_of(keyframes);
+  for (std::size_t k = 0; k < todo.size(); ++k) stored_[todo[k]].T_w_c_integrated = poses[k];
   for (const std::size_t i : todo) {
     Stored& s = stored_[i];
     octree_->integrate(
@@ -184,14 +232,12 @@ void DenseMapper::process(DenseKeyframe item) {
     // the stored images. A culled keyframe is at its parent-resolved pose, since its own froze
     // when it was culled: for sources since 2026-11-26; for the keyframe itself since 2026-11-27
     // (culled while queued, it was repaired at the frozen pose, across a loop correction).
-    SE3 T_w_c;
-    std::vector<SE3> T_w_sources(n);
-    map_->read_consistent([&] {
-      T_w_c = tracking::resolved_T_w_c(item.keyframe);
-      for (std::size_t k = 0; k < n; ++k) {
-        T_w_sources[k] = tracking::resolved_T_w_c(stored_[stored_.size() - 1 - k].keyframe);
-      }
-    });
+    std::vector<map::KeyFramePtr> keyframes{item.keyframe};
+    for (std::size_t k = 0; k < n; ++k)
+      keyframes.push_back(stored_[stored_.size() - 1 - k].keyframe);
+    const std::vector<SE3> poses = poses_of(keyframes);
+    const SE3& T_w_c = poses[0];
+    const std::vector<SE3> T_w_sources(poses.begin() + 1, poses.end());
     std::vector<inpainting::SourceView> sources;
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
@@ -245,7 +291,7 @@ void DenseMapper::process(DenseKeyframe item) {
 
   if (octree_) {
     watch.reset();
-    const int big_change = map_->big_change_index();
+    const int big_change = big_change_index();
     // Per-keyframe integration and whole-map rebuilds are timed apart: a rebuild costs all
     // keyframes at once.
     const auto delay = static_cast<std::size_t>(config_.octree_delay_keyframes);
@@ -306,7 +352,7 @@ void DenseMapper::compact_old_keyframes() {
 }
 
 void DenseMapper::rebuild_octree(std::size_t keep_back) {
-  seen_big_change_ = map_->big_change_index();
+  seen_big_change_ = big_change_index();
   octree_->clear();
   for (Stored& s : stored_) s.integrated = false;
   integrate_due(keep_back);

@@ -1,8 +1,10 @@
 #pragma once
 // The back end of DDL-SLAM section III-E, after tracking: every new keyframe is repaired by
 // background inpainting from the previous (already repaired) keyframes and integrated into the
-// OctoMap. In threaded mode it runs in its own thread behind a bounded queue, so neither stage
-// stalls tracking; in deterministic mode it runs inline. When loop closing or global BA moves
+// OctoMap. It runs in its own thread behind a bounded queue, so neither stage stalls tracking. In
+// threaded mode the thread reads the keyframe poses when it gets to them; in deterministic mode
+// (deterministic_thread) each step reads the poses and the map's big-change index that submit()
+// took for it, so the outputs are those of the inline stage, whatever the thread's timing. When loop closing or global BA moves
 // keyframes (Map::big_change_index), the octree is rebuilt from the stored repaired keyframes at
 // their corrected poses.
 // Thread-safety: submit(), finish() and the accessors from one thread (the pipeline's).
@@ -16,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <variant>
 #include <vector>
 
@@ -34,9 +37,13 @@ struct DenseMapperConfig {
   bool inpainting_enabled = true;  // repair keyframes before mapping
   bool octomap_enabled = true;     // build the octree
   bool threaded = false;           // own thread (threaded pipeline mode)
-  std::size_t queue_capacity = 8;  // keyframes waiting (threaded)
-  /// Threaded mode on Linux: nice value of the dense thread (0..19), so that on a machine with
-  /// few cores tracking gets the CPU first; the dense work catches up in tracking's idle time.
+  /// Deterministic mode: the dense stage runs in its own thread all the same, but every pose and
+  /// map state it reads is taken when the keyframe is submitted, as the inline stage would read
+  /// them, so its outputs do not depend on the thread's timing. false = inline.
+  bool deterministic_thread = true;
+  std::size_t queue_capacity = 8;  // keyframes waiting for the dense thread
+  /// On Linux: nice value of the dense thread (0..19), so that on a machine with few cores
+  /// tracking gets the CPU first; the dense work catches up in tracking's idle time.
   int thread_nice = 10;
   std::string save_inpainted_dir;  // non-empty: write repaired keyframes here
   /// Pixels this close outside a keyframe's dynamic mask (object edges the mask missed) are
@@ -57,6 +64,14 @@ struct DenseKeyframe {
   cv::Mat bgr;  // as tracked (undistorted)
   cv::Mat depth_m;
   cv::Mat dynamic_mask;  // combined dynamic mask of the frame (may be empty)
+};
+
+/// What the dense stage reads from the map for one step (deterministic_thread), taken in one
+/// consistent reading when the step is submitted: the world poses of the keyframes it may use
+/// (culled ones resolved through their parents) and the map's big-change index.
+struct DensePoseSnapshot {
+  int big_change_index = 0;
+  std::unordered_map<map::KeyFrameId, SE3> T_w_c;
 };
 
 struct DenseStats {
@@ -114,11 +129,28 @@ class DenseMapper {
     bool integrated = false;  // in the octree (octree_delay_keyframes)
     int pixel_step = 1;       // > 1: compacted to the octree's pixels (no longer a source)
   };
-  struct ResetRequest {};
-  using Item = std::variant<DenseKeyframe, ResetRequest>;
+  struct ResetRequest {
+    std::optional<DensePoseSnapshot> snapshot;
+  };
+  struct Submitted {
+    DenseKeyframe keyframe;
+    std::optional<DensePoseSnapshot> snapshot;
+  };
+  using Item = std::variant<Submitted, ResetRequest>;
+  /// The poses of `keyframes` and the big-change index now (the caller's thread).
+  DensePoseSnapshot take_snapshot(const std::vector<map::KeyFramePtr>& keyframes) const;
+  /// The map's big-change index as the current step sees it.
+  int big_change_index() const;
+  /// Reads the poses of `keyframes` as the current step sees them, in one reading.
+  std::vector<SE3> poses_of(const std::vector<map::KeyFramePtr>& keyframes) const;
   void worker();
   void handle(Item item);
   void process(DenseKeyframe item);
+  /// The snapshot the worker's current step reads instead of the map (nullptr: the map).
+  const DensePoseSnapshot* snapshot_ = nullptr;
+  /// Caller side of deterministic_thread: the keyframes submitted since the last reset, whose
+  /// poses a step may read (the worker's stored_ holds the same ones).
+  std::vector<map::KeyFramePtr> submitted_;
   void drop_stored();
   /// Clears the octree and integrates every stored keyframe but the newest `keep_back` at its
   /// current pose.
