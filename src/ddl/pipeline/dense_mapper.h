@@ -4,9 +4,10 @@
 // OctoMap. It runs in its own thread behind a bounded queue, so neither stage stalls tracking. In
 // threaded mode the thread reads the keyframe poses when it gets to them; in deterministic mode
 // (deterministic_thread) each step reads the poses and the map's big-change index that submit()
-// took for it, so the outputs are those of the inline stage, whatever the thread's timing. When loop closing or global BA moves
-// keyframes (Map::big_change_index), the octree is rebuilt from the stored repaired keyframes at
-// their corrected poses.
+// took for it, so the outputs are those of the inline stage, whatever the thread's timing. When
+// loop closing or global BA moves keyframes (Map::big_change_index), the octree is rebuilt from the
+// stored repaired keyframes at their corrected poses.
+//
 // Thread-safety: submit(), finish() and the accessors from one thread (the pipeline's).
 
 #include <atomic>
@@ -146,11 +147,6 @@ class DenseMapper {
   void worker();
   void handle(Item item);
   void process(DenseKeyframe item);
-  /// The snapshot the worker's current step reads instead of the map (nullptr: the map).
-  const DensePoseSnapshot* snapshot_ = nullptr;
-  /// Caller side of deterministic_thread: the keyframes submitted since the last reset, whose
-  /// poses a step may read (the worker's stored_ holds the same ones).
-  std::vector<map::KeyFramePtr> submitted_;
   void drop_stored();
   /// Clears the octree and integrates every stored keyframe but the newest `keep_back` at its
   /// current pose.
@@ -172,6 +168,11 @@ class DenseMapper {
   std::shared_ptr<const map::Map> map_;
   std::unique_ptr<octomap::OctreeMap> octree_;
   std::vector<Stored> stored_;  // all repaired keyframes, in insertion order
+  /// The snapshot the worker's current step reads instead of the map (nullptr: the map).
+  const DensePoseSnapshot* snapshot_ = nullptr;
+  /// Caller side of deterministic_thread: the keyframes submitted since the last reset, whose
+  /// poses a step may read (the worker's stored_ holds the same ones).
+  std::vector<map::KeyFramePtr> submitted_;
   int seen_big_change_ = 0;
   TimingStats timings_;
   mutable std::mutex stats_mutex_;
