@@ -123,6 +123,11 @@ void DenseMapper::reset() {
 }
 
 void DenseMapper::handle(Item item) {
+  // snapshot_ points into `item`: cleared on every way out, an exception included.
+  struct ClearSnapshot {
+    const DensePoseSnapshot*& snapshot;
+    ~ClearSnapshot() { snapshot = nullptr; }
+  } clear{snapshot_};
   if (auto* submitted = std::get_if<Submitted>(&item)) {
     snapshot_ = submitted->snapshot ? &*submitted->snapshot : nullptr;
     process(std::move(submitted->keyframe));
@@ -131,7 +136,6 @@ void DenseMapper::handle(Item item) {
     snapshot_ = reset.snapshot ? &*reset.snapshot : nullptr;
     drop_stored();
   }
-  snapshot_ = nullptr;
 }
 
 void DenseMapper::drop_stored() {

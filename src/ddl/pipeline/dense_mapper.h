@@ -40,7 +40,9 @@ struct DenseMapperConfig {
   bool threaded = false;           // own thread (threaded pipeline mode)
   /// Deterministic mode: the dense stage runs in its own thread all the same, but every pose and
   /// map state it reads is taken when the keyframe is submitted, as the inline stage would read
-  /// them, so its outputs do not depend on the thread's timing. false = inline.
+  /// them, so its outputs do not depend on the thread's timing. An error of the stage then stops
+  /// the run at a later keyframe or at its end rather than at the failing keyframe. false =
+  /// inline.
   bool deterministic_thread = true;
   std::size_t queue_capacity = 8;  // keyframes waiting for the dense thread
   /// On Linux: nice value of the dense thread (0..19), so that on a machine with few cores
