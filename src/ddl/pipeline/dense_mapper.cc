@@ -239,13 +239,12 @@ void DenseMapper::process(DenseKeyframe item) {
     std::vector<map::KeyFramePtr> keyframes{item.keyframe};
     for (std::size_t k = 0; k < n; ++k)
       keyframes.push_back(stored_[stored_.size() - 1 - k].keyframe);
-    const std::vector<SE3> poses = poses_of(keyframes);
+    const std::vector<SE3> poses = poses_of(keyframes);  // the keyframe's, then its sources'
     const SE3& T_w_c = poses[0];
-    const std::vector<SE3> T_w_sources(poses.begin() + 1, poses.end());
     std::vector<inpainting::SourceView> sources;
     for (std::size_t k = 0; k < n; ++k) {
       const Stored& s = stored_[stored_.size() - 1 - k];  // newest first
-      sources.push_back({T_w_sources[k], s.bgr, s.depth_m, s.exclude, s.repaired, s.blocks});
+      sources.push_back({poses[k + 1], s.bgr, s.depth_m, s.exclude, s.repaired, s.blocks});
     }
     const inpainting::InpaintingResult r = inpainting::inpaint(
         item.bgr, item.depth_m, mask, T_w_c.inverse(), sources, camera_, config_.inpainting);
