@@ -64,6 +64,39 @@ TEST(SegmentationStage, RunsAheadOfTheConsumerByItsCapacity) {
   EXPECT_EQ(segmented.load(), 4u);
 }  // the destructor closes the queue while the worker is blocked in push() and joins it
 
+// Live input: a camera whose frame advances while tracking is busy. The worker must take the
+// frame that is newest once tracking has room, not one it took, and segmented, while tracking was
+// still busy (that frame would be handed on stale after a slow tracking step).
+TEST(SegmentationStage, LiveInputTakesTheNewestFrameOnceThereIsRoom) {
+  std::atomic<std::size_t> camera_frame{0};  // the frame the camera delivers now
+  std::atomic<std::size_t> taken{0};
+  SegmentationStage stage(
+      [&]() -> std::optional<io::RgbdFrame> {
+        ++taken;
+        io::RgbdFrame frame;
+        frame.index = camera_frame.load();
+        frame.rgb = cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(0));
+        return frame;
+      },
+      index_mask, 1, /*take_when_room=*/true);
+  // The first frame fills the queue; nothing else is taken while tracking holds no frame.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (taken.load() < 1 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(taken.load(), 1u);
+  // A slow tracking step: the camera moves on to frame 7 before tracking asks for more.
+  camera_frame = 7;
+  std::optional<SegmentedFrame> first = stage.next();
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->frame.index, 0u);
+  std::optional<SegmentedFrame> second = stage.next();
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->frame.index, 7u) << "a frame taken before there was room was handed on";
+  EXPECT_EQ(second->cnn.mask.at<std::uint8_t>(0, 0), 7);
+}
+
 TEST(SegmentationStage, CnnErrorArrivesAtItsFrameAndEndsTheStage) {
   std::size_t produced = 0;
   SegmentationStage stage(counting_source(10, produced), [](const io::RgbdFrame& f) {

@@ -30,6 +30,15 @@ class BoundedQueue {
     return true;
   }
 
+  /// Blocks while full and open: true once there is room for an item, false when closed. A
+  /// producer that should hand on the newest input (a live camera's frame) waits here before it
+  /// takes its input, instead of holding an item that ages while push() blocks.
+  bool wait_for_room() {
+    std::unique_lock lock(mutex_);
+    not_full_.wait(lock, [&] { return closed_ || items_.size() < capacity_; });
+    return !closed_;
+  }
+
   /// Never blocks: when full, the oldest items make room (a camera's frame buffer keeps the
   /// newest frames). Returns how many were displaced, std::nullopt (item dropped) when closed.
   std::optional<std::size_t> push_displacing_oldest(T item) {

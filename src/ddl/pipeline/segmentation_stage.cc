@@ -2,8 +2,9 @@
 
 namespace ddl::pipeline {
 
-SegmentationStage::SegmentationStage(FrameSource source, SegmentFn segment, std::size_t capacity)
-    : queue_(capacity) {
+SegmentationStage::SegmentationStage(FrameSource source, SegmentFn segment, std::size_t capacity,
+                                     bool take_when_room)
+    : queue_(capacity), take_when_room_(take_when_room) {
   thread_ = std::thread(
       [this, source = std::move(source), segment = std::move(segment)] { run(source, segment); });
 }
@@ -15,6 +16,10 @@ SegmentationStage::~SegmentationStage() {
 
 void SegmentationStage::run(const FrameSource& source, const SegmentFn& segment) {
   while (true) {
+    // Live input: the frame is taken only once tracking has room for it, so that it is the newest
+    // one the camera has delivered when the CNN starts, not one that waits, segmented, while
+    // tracking is busy with a slow frame.
+    if (take_when_room_ && !queue_.wait_for_room()) break;
     Item item;
     try {
       std::optional<io::RgbdFrame> frame = source();

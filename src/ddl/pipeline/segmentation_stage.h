@@ -40,7 +40,10 @@ class SegmentationStage {
   using SegmentFn = std::function<CnnMask(const io::RgbdFrame&)>;
 
   /// Starts the worker. `capacity`: frames segmented ahead of the consumer (at least 1).
-  SegmentationStage(FrameSource source, SegmentFn segment, std::size_t capacity = 2);
+  /// `take_when_room` (live input): the worker takes a frame from the source only when the queue
+  /// has room for it, so that a frame never waits, segmented, for the consumer.
+  SegmentationStage(FrameSource source, SegmentFn segment, std::size_t capacity = 2,
+                    bool take_when_room = false);
   ~SegmentationStage();
   SegmentationStage(const SegmentationStage&) = delete;
   SegmentationStage& operator=(const SegmentationStage&) = delete;
@@ -57,6 +60,7 @@ class SegmentationStage {
   void run(const FrameSource& source, const SegmentFn& segment);
 
   BoundedQueue<Item> queue_;
+  bool take_when_room_;
   std::thread thread_;
 };
 

@@ -174,7 +174,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     // Live runs keep one frame between the CNN and tracking, as few as a frame buffer would.
     SegmentationStage segmentation([&] { return prefetcher.next(); },
                                    [&](const io::RgbdFrame& f) { return system.segment(f); },
-                                   options.drop_late_frames ? 1 : 2);
+                                   options.drop_late_frames ? 1 : 2,
+                                   /*take_when_room=*/options.drop_late_frames);
     // Destroyed first: the segmentation worker must not wait for a frame's due time to stop.
     const struct CancelPacing {
       FramePacer* pacer;
