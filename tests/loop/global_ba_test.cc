@@ -72,6 +72,41 @@ TEST(GlobalBundleAdjustment, MergePropagatesToKeyframesAndPointsCreatedMeanwhile
   }
 }
 
+// A reset while a background global BA ran (LoopCloser::request_reset does not wait for it):
+// its result must not move the new map nor announce a correction of it.
+TEST(GlobalBundleAdjustment, MergeIntoAMapClearedMeanwhileChangesNothing) {
+  std::mt19937_64 rng(43);
+  const SyntheticWorld world = SyntheticWorld::trained_room(1500, rng);
+  auto map = std::make_shared<map::Map>();
+  test::FakeTracker tracker(map, world);
+  auto pose = [](int k) { return test::look_along(Vec3d(0.1 * k, 0.0, 0.0), test::rad(3.0 * k)); };
+  for (int k = 0; k < 3; ++k) {
+    map->add_keyframe(tracker.make_keyframe(world.observe(pose(k), rng), pose(k), k));
+  }
+  const mapping::CameraIntrinsics camera = mapping::make_intrinsics(world.camera, test::kBf);
+  GlobalBaResult result =
+      run_global_bundle_adjustment(*map, camera, optimization::OptimizerConfig{});
+  ASSERT_FALSE(result.aborted);
+  ASSERT_EQ(result.T_c_w.size(), 3u);
+  // Move the solved poses, so that a merge would show.
+  for (auto& [id, T] : result.T_c_w) T = SE3(Quatd::Identity(), Vec3d(0.5, 0.0, 0.0)) * T;
+
+  map->clear();
+  std::vector<map::KeyFramePtr> fresh;
+  for (int k = 0; k < 2; ++k) {
+    fresh.push_back(tracker.make_keyframe(world.observe(pose(k), rng), pose(k), 10.0 + k));
+    ASSERT_TRUE(map->add_keyframe(fresh.back()));
+  }
+  const int big_change = map->big_change_index();
+  const std::uint64_t frame_changes = map->frame_change_count();
+  EXPECT_EQ(merge_global_bundle_adjustment(*map, result), 0u);
+  EXPECT_EQ(map->big_change_index(), big_change);
+  EXPECT_EQ(map->frame_change_count(), frame_changes);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LT((fresh[k]->T_c_w().matrix() - pose(k).matrix()).norm(), 1e-12);
+  }
+}
+
 TEST(GlobalBundleAdjustment, RaisedAbortStopsWithoutResult) {
   std::mt19937_64 rng(42);
   const SyntheticWorld world = SyntheticWorld::trained_room(1500, rng);

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <deque>
 #include <set>
 #include <vector>
@@ -68,6 +69,14 @@ GlobalBaResult run_global_bundle_adjustment(const map::Map& map,
 }
 
 std::size_t merge_global_bundle_adjustment(map::Map& map, const GlobalBaResult& result) {
+  // A solve of a map that a reset has cleared since (ids are never reused, so none of its
+  // keyframes comes back): nothing to write, and no correction to announce, which would make the
+  // dense stage rebuild its octree and the followers of map corrections drop a frame's data.
+  const std::vector<map::KeyFramePtr> present = map.keyframes();
+  if (std::none_of(present.begin(), present.end(),
+                   [&](const map::KeyFramePtr& kf) { return result.T_c_w.count(kf->id()) != 0; })) {
+    return 0;
+  }
   std::size_t updated = 0;
   map.apply_frame_change([&] {
     const std::vector<map::KeyFramePtr> keyframes = map.keyframes();

@@ -36,7 +36,9 @@ GlobalBaResult run_global_bundle_adjustment(const map::Map& map,
                                             const optimization::OptimizerConfig& config,
                                             const std::atomic<bool>* abort = nullptr);
 
-/// Returns the number of keyframes whose pose was set.
+/// Returns the number of keyframes whose pose was set. A result none of whose keyframes is in
+/// the map any more (a reset cleared it while the solve ran) changes nothing and announces no
+/// correction: it returns 0.
 std::size_t merge_global_bundle_adjustment(map::Map& map, const GlobalBaResult& result);
 
 }  // namespace ddl::loop
