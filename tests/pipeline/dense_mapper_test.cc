@@ -2,14 +2,18 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "ddl/core/error.h"
 #include "ddl/map/map.h"
 #include "ddl/synthetic/sequence.h"
 
@@ -439,6 +443,158 @@ TEST(DenseMapper, ACulledKeyframeMovesWithItsParentInInpaintingAndRebuilds) {
   double max_difference = 0.0;
   cv::minMaxLoc(difference.reshape(1), nullptr, &max_difference);
   EXPECT_LE(max_difference, 1.0) << "the culled keyframe was used at its frozen pose";
+}
+
+}  // namespace
+}  // namespace ddl::pipeline
+
+namespace ddl::pipeline {
+namespace {
+
+/// Mean x of the octree's occupied leaves (world frame).
+double mean_occupied_x(const octomap::OctreeMap& octree) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  const auto& tree = octree.tree();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    sum += it.getX();
+    ++n;
+  }
+  return n == 0 ? 0.0 : sum / static_cast<double>(n);
+}
+
+// A map file keeps the dense stage's scans (map::DenseScan), so that a later run on the loaded
+// map builds the octree of the run that made it, and grows it. A culled keyframe's scan is
+// anchored to its parent, which is in the file, and follows it when a later run moves it.
+TEST(DenseMapper, ScansSavedWithAMapRebuildItsOctreeInALaterRun) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  const auto pose_at = [](double x) { return SE3(Mat3d::Identity(), Vec3d(x, 0.0, 0.0)); };
+  const auto images = [&](int k) {
+    cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(40 + 50 * k, 80, 120));
+    cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f + 0.2f * k));
+    return std::make_pair(bgr, depth);
+  };
+  DenseMapperConfig config;
+  config.inpainting_enabled = false;
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "dense_mapper_scans";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+
+  // The first run: A at x = 0, B at 0.25 (culled later, parent A), C at 0.5.
+  std::vector<map::DenseScan> scans;
+  std::size_t first_occupied = 0;
+  {
+    auto map = std::make_shared<map::Map>();
+    DenseMapper dense(config, camera, map);
+    std::vector<map::KeyFramePtr> kfs;
+    for (int k = 0; k < 3; ++k) {
+      auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), k,
+                                                std::make_shared<map::FrameFeatures>(),
+                                                pose_at(0.25 * k).inverse());
+      map->add_keyframe(kf);
+      if (k > 0) kf->set_parent(kfs.front());
+      kfs.push_back(kf);
+      const auto [bgr, depth] = images(k);
+      dense.submit({kf, bgr, depth, cv::Mat()});
+    }
+    EXPECT_THROW(dense.dense_scans(), Error);  // before finish()
+    ASSERT_TRUE(kfs[1]->set_bad());
+    map->erase_culled_keyframe(kfs[1]);
+    dense.finish();
+    scans = dense.dense_scans();
+    first_occupied = dense.octree()->stats().occupied_leaves;
+    dense.octree()->write_ot((dir / "first.ot").string());
+    ASSERT_EQ(scans.size(), 3u);
+    EXPECT_EQ(scans[1].anchor, kfs[0]->id()) << "the culled keyframe's scan hangs on its parent";
+    EXPECT_LT((scans[1].T_anchor_c.translation() - Vec3d(0.25, 0.0, 0.0)).norm(), 1e-12);
+    EXPECT_EQ(scans[2].anchor, kfs[2]->id());
+    EXPECT_LT(scans[2].T_anchor_c.translation().norm(), 1e-12);
+    EXPECT_EQ(scans[0].pixel_step, config.octree.pixel_stride);
+    EXPECT_EQ(scans[0].bgr.cols, (camera.width + 3) / 4);
+  }
+  ASSERT_GT(first_occupied, 100u);
+
+  // A later run on the loaded map (A and C; B was culled): the same octree before any keyframe of
+  // its own, and the scans follow their anchors when they move.
+  const auto later = [&](double move_a_m, const std::string& ot) {
+    auto map = std::make_shared<map::Map>();
+    for (const int k : {0, 2}) {
+      map->add_keyframe(std::make_shared<map::KeyFrame>(static_cast<map::KeyFrameId>(k), k,
+                                                        std::make_shared<map::FrameFeatures>(),
+                                                        pose_at(0.25 * k).inverse()));
+    }
+    DenseMapper dense(config, camera, map);
+    dense.preload(scans);
+    map->keyframe(0)->set_T_c_w(pose_at(move_a_m).inverse());
+    dense.finish();
+    EXPECT_EQ(dense.stats().scans_loaded, 3u);
+    dense.octree()->write_ot((dir / ot).string());
+    return std::make_pair(dense.octree()->stats().occupied_leaves,
+                          mean_occupied_x(*dense.octree()));
+  };
+  const auto [occupied, x_mean] = later(0.0, "later.ot");
+  EXPECT_EQ(occupied, first_occupied);
+  std::ifstream a(dir / "first.ot", std::ios::binary);
+  std::ifstream b(dir / "later.ot", std::ios::binary);
+  const std::string first_bytes{std::istreambuf_iterator<char>(a), {}};
+  const std::string later_bytes{std::istreambuf_iterator<char>(b), {}};
+  EXPECT_TRUE(first_bytes == later_bytes) << "the later run's octree differs from the first's";
+  // A moved by 1 m: its scan and the culled B's move with it, C's stays (2 of 3 equal-sized walls).
+  const auto [moved_occupied, moved_x_mean] = later(1.0, "moved.ot");
+  EXPECT_GT(moved_x_mean - x_mean, 0.4);
+  EXPECT_LT(moved_x_mean - x_mean, 0.9);
+  std::filesystem::remove_all(dir);
+}
+
+// Loaded scans go into the octree only: the run's own keyframes are repaired from its own
+// keyframes, and a scan whose stride the octree cannot take is a configuration error.
+TEST(DenseMapper, LoadedScansAreNoInpaintingSourcesAndMustFitTheStride) {
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  auto map = std::make_shared<map::Map>();
+  auto anchor = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), 0,
+                                                std::make_shared<map::FrameFeatures>(), SE3());
+  map->add_keyframe(anchor);
+  map::DenseScan scan;
+  scan.anchor = anchor->id();
+  scan.pixel_step = 1;  // full resolution: subsampled on preload
+  scan.bgr = cv::Mat(camera.height, camera.width, CV_8UC3, cv::Scalar(10, 200, 10));
+  scan.depth_m = cv::Mat(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+  {
+    DenseMapperConfig config;
+    config.mask_border_px = 0;
+    config.octree.pixel_stride = 1;  // the loaded scan stays at full resolution, as a source is
+    DenseMapper dense(config, camera, map);
+    dense.preload({scan});
+    // A keyframe at the same pose with a person in front of the wall: the loaded scan saw the
+    // wall behind it, but is no source, so nothing is filled.
+    auto kf = std::make_shared<map::KeyFrame>(map->next_keyframe_id(), 1,
+                                              std::make_shared<map::FrameFeatures>(), SE3());
+    map->add_keyframe(kf);
+    cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(10, 200, 10));
+    cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+    cv::Mat mask = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    mask(cv::Rect(250, 150, 120, 180)).setTo(255);
+    depth.setTo(1.0f, mask);
+    bgr.setTo(cv::Scalar(0, 0, 255), mask);
+    dense.submit({kf, bgr, depth, mask});
+    EXPECT_THROW(dense.preload({scan}), Error);  // after a submit()
+    dense.finish();
+    EXPECT_EQ(dense.stats().scans_loaded, 1u);
+    EXPECT_GT(dense.stats().masked_pixels, 20000);
+    EXPECT_EQ(dense.stats().filled_pixels, 0);
+    EXPECT_EQ(dense.octree()->stats().scans_integrated, 2u);
+  }
+  DenseMapperConfig config;
+  DenseMapper dense(config, camera, map);
+  scan.pixel_step = 2;
+  scan.bgr = cv::Mat(camera.height / 2, camera.width / 2, CV_8UC3, cv::Scalar(10, 200, 10));
+  scan.depth_m = cv::Mat(camera.height / 2, camera.width / 2, CV_32FC1, cv::Scalar(2.0f));
+  EXPECT_THROW(dense.preload({scan}), ConfigError);
+  scan.pixel_step = 4;
+  scan.anchor = 99;
+  EXPECT_THROW(dense.preload({scan}), Error);  // an anchor the map does not hold
 }
 
 }  // namespace

@@ -28,12 +28,13 @@ namespace {
 
 using testing::default_vocabulary;
 
-/// The SLAM core with the geometry check (no CNN): keyframes keep their depth images, which the
-/// map file stores beside them.
+/// The SLAM core with the geometry check (no CNN) and the octree: keyframes keep their depth
+/// images, and the dense stage its scans, which the map file stores beside them.
 SystemConfig core_config() {
   SystemConfig config = testing::core_config();
   config.dynamic.enabled = true;
   config.dynamic.use_segmentation = false;
+  config.dense.octomap_enabled = true;
   return config;
 }
 
@@ -182,17 +183,91 @@ TEST(MapFile, ALoadedMapHoldsTheSavedKeyframesPointsAndTree) {
   EXPECT_GT(loaded.next_keyframe_id(), a.back()->id());
   EXPECT_GT(loaded.next_map_point_id(), pa.back()->id());
 
+  // The dense stage's scans, every one anchored to a stored keyframe, with their images as the
+  // stage kept them (depth to TUM's 0.2 mm unit).
+  const std::vector<map::DenseScan> kept = s.system->dense_mapper().dense_scans();
+  ASSERT_GE(kept.size(), contents.keyframes);
+  ASSERT_EQ(contents.dense_scans.size(), kept.size());
+  EXPECT_EQ(contents.version, 2u);
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const map::DenseScan& a = kept[k];
+    const map::DenseScan& b = contents.dense_scans[k];
+    EXPECT_EQ(a.anchor, b.anchor);
+    EXPECT_NE(loaded.keyframe(b.anchor), nullptr);
+    EXPECT_LT(testing::pose_error(a.T_anchor_c, b.T_anchor_c).translation_m, 1e-12);
+    EXPECT_EQ(a.pixel_step, b.pixel_step);
+    EXPECT_EQ(cv::norm(a.bgr, b.bgr, cv::NORM_INF), 0.0);
+    EXPECT_LE(cv::norm(a.depth_m, b.depth_m, cv::NORM_INF), 0.5 / 5000.0 + 1e-6);
+    EXPECT_EQ(cv::countNonZero(a.exclude), cv::countNonZero(b.exclude));
+  }
+
   // Saved again, the loaded map gives the same file.
   const auto again = temp_path("again.ddlmap");
   map::MapFileInfo info = contents.info;
-  map::save_map_file(loaded, info, again.string(),
+  map::save_map_file(
+      loaded, info, again.string(),
+      [&](map::KeyFrameId id) -> std::optional<map::KeyFrameImages> {
+        const auto it = contents.images.find(id);
+        if (it == contents.images.end()) return std::nullopt;
+        return it->second;
+      },
+      contents.dense_scans);
+  EXPECT_TRUE(read_bytes(again) == read_bytes(s.map_path));
+  std::filesystem::remove(again);
+}
+
+// Version 1 files (stop 30, before the dense scans) are still read: the same map without scans.
+TEST(MapFile, AVersionOneFileIsReadWithoutDenseScans) {
+  if (!default_vocabulary()) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const Session& s = first_session();
+  map::Map plain;
+  map::MapFileContents contents = map::load_map_file(s.map_path.string(), plain);
+  const auto path = temp_path("v1.ddlmap");
+  // Without scans the file ends with the scan count (8 zero bytes) and the padding: dropping the
+  // count and setting version 1 gives the version 1 layout.
+  map::save_map_file(plain, contents.info, path.string(),
                      [&](map::KeyFrameId id) -> std::optional<map::KeyFrameImages> {
                        const auto it = contents.images.find(id);
                        if (it == contents.images.end()) return std::nullopt;
                        return it->second;
                      });
-  EXPECT_TRUE(read_bytes(again) == read_bytes(s.map_path));
-  std::filesystem::remove(again);
+  std::vector<unsigned char> bytes = read_bytes(path);
+  ASSERT_GE(bytes.size(), 112u);
+  bytes.erase(bytes.end() - 16, bytes.end() - 8);
+  const std::uint32_t version = 1;
+  std::memcpy(bytes.data() + 8, &version, sizeof(version));
+  const std::uint64_t sum = checksum64(bytes.data(), bytes.size() - 8);
+  std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
+  write_bytes(path, bytes);
+  map::Map map;
+  const map::MapFileContents v1 = map::load_map_file(path.string(), map);
+  std::filesystem::remove(path);
+  EXPECT_EQ(v1.version, 1u);
+  EXPECT_EQ(v1.keyframes, contents.keyframes);
+  EXPECT_EQ(v1.map_points, contents.map_points);
+  EXPECT_EQ(v1.images.size(), contents.images.size());
+  EXPECT_TRUE(v1.dense_scans.empty());
+}
+
+// A scan whose images do not fit the camera at its stride is a programming error of the writer,
+// not a file it writes; a scan anchored to a keyframe the file does not hold is left out.
+TEST(MapFile, DenseScansAreCheckedWhenWrittenAndLeftOutWithoutTheirAnchor) {
+  if (!default_vocabulary()) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  const Session& s = first_session();
+  map::Map plain;
+  const map::MapFileContents contents = map::load_map_file(s.map_path.string(), plain);
+  ASSERT_FALSE(contents.dense_scans.empty());
+  const auto path = temp_path("scans.ddlmap");
+  std::vector<map::DenseScan> scans{contents.dense_scans.front()};
+  scans.front().bgr = cv::Mat(10, 10, CV_8UC3, cv::Scalar::all(0));
+  EXPECT_THROW(map::save_map_file(plain, contents.info, path.string(), {}, scans), Error);
+  scans = {contents.dense_scans.front(), contents.dense_scans.front()};
+  scans[1].anchor = 1u << 30;  // no such keyframe
+  map::save_map_file(plain, contents.info, path.string(), {}, scans);
+  map::Map map;
+  const map::MapFileContents read = map::load_map_file(path.string(), map);
+  std::filesystem::remove(path);
+  EXPECT_EQ(read.dense_scans.size(), 1u);
 }
 
 TEST(MapFile, ADamagedOrForeignFileIsRefusedWithItsName) {
@@ -279,6 +354,14 @@ TEST(MapFile, LocalizationOnlyRelocalizesInTheSavedMapAndTracksWithoutChangingIt
   EXPECT_EQ(stats.keyframe_depth_images_loaded, contents.keyframes);
   EXPECT_EQ(stats.geometry_checks_without_reference, 0u);
   EXPECT_GE(stats.geometry_checks_low_cost + stats.geometry_checks_predicted, stats.frames - 1);
+  // No keyframe of its own, but the octree of the map it loaded (the first session's, up to the
+  // poses local BA gave keyframes after they went into that octree).
+  EXPECT_EQ(stats.dense.scans_loaded, contents.dense_scans.size());
+  const std::size_t first = s.system->dense_mapper().octree()->stats().occupied_leaves;
+  const std::size_t now = system.dense_mapper().octree()->stats().occupied_leaves;
+  std::printf("octree: %zu occupied voxels, the first session's %zu\n", now, first);
+  EXPECT_GT(first, 1000u);
+  EXPECT_NEAR(static_cast<double>(now), static_cast<double>(first), 0.02 * first);
   const testing::PoseError worst = worst_error(system.camera_trajectory(), s);
   std::printf("worst error %.4f m, %.3f deg\n", worst.translation_m, worst.rotation_deg);
   EXPECT_LT(worst.translation_m, 0.03);

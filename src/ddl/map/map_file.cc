@@ -1,4 +1,5 @@
-// Layout of a map file (little-endian, version 1; docs/map-files.md):
+// Layout of a map file (little-endian, version 2; docs/map-files.md; version 1 ends after the map
+// points):
 //   header, 96 bytes:
 //     0  char[8] magic "DDLSMAP\0"      8  u32 version          12 u32 reserved (0)
 //    16  u64 descriptor tag            24  u64 vocabulary words
@@ -16,6 +17,11 @@
 //   map point, in id order:
 //     u64 id, u64 reference keyframe id, f64[3] position, i32 visible, i32 found,
 //     u32 observation count, observations x (u64 keyframe id, u32 feature index, u8 stereo)
+//   dense scans (version 2): u64 count, then each:
+//     u64 anchor keyframe id, f64[4] quaternion x y z w and f64[3] translation of T_anchor_c,
+//     u32 pixel step s, then PNGs of ceil(width / s) x ceil(height / s) pixels, each after its u32
+//     byte count: 8-bit colour (BGR), 16-bit depth at 5000 per metre, 8-bit exclusion mask (0
+//     bytes: none)
 //   zero padding to a multiple of 8, u64 checksum of every preceding byte.
 
 #include "ddl/map/map_file.h"
@@ -38,7 +44,9 @@ namespace ddl::map {
 namespace {
 
 constexpr char kMagic[8] = {'D', 'D', 'L', 'S', 'M', 'A', 'P', '\0'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kOldestVersion = 1;  // without dense scans
+constexpr int kMaxPixelStep = 64;
 constexpr std::size_t kHeaderBytes = 96;
 constexpr std::size_t kChecksumBytes = 8;
 constexpr std::size_t kDescriptorBytes = 32;
@@ -118,15 +126,47 @@ void write_png(Writer& w, const cv::Mat& image) {
   w.put_bytes(png.data(), png.size());
 }
 
+/// The images of a dense scan at `pixel_step` (OctreeMap's subsampling: every step-th pixel from
+/// the first).
+cv::Size scan_size(const MapFileInfo& info, int pixel_step) {
+  return {(info.image_width + pixel_step - 1) / pixel_step,
+          (info.image_height + pixel_step - 1) / pixel_step};
+}
+
+/// Metres to TUM's 16-bit units; beyond 13.1 m, negative and non-finite become no measurement.
+cv::Mat depth_units_of(const cv::Mat& depth_m) {
+  cv::Mat depth = depth_m.clone();
+  depth.setTo(0.0f, ~(depth == depth) | (depth > 65535.0 / kDepthUnitsPerMetre) | (depth < 0.0f));
+  cv::Mat units;
+  depth.convertTo(units, CV_16UC1, kDepthUnitsPerMetre);
+  return units;
+}
+
+void put_pose(Writer& w, const SE3& T) {
+  const Quatd& q = T.quaternion();
+  for (double v : {q.x(), q.y(), q.z(), q.w()}) w.put<double>(v);
+  for (int i = 0; i < 3; ++i) w.put<double>(T.translation()[i]);
+}
+
+/// A pose as put_pose() wrote it; fails on a non-finite value or a quaternion whose norm is not 1.
+SE3 get_pose(Reader& r, const char* what) {
+  double q[4];
+  for (double& v : q) v = r.get<double>();
+  Vec3d t;
+  for (int i = 0; i < 3; ++i) t[i] = r.get<double>();
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!t.allFinite() || !(std::abs(norm - 1.0) < 1e-6)) {
+    r.fail(fmt::format("invalid {} (the quaternion must have norm 1)", what));
+  }
+  return SE3(Quatd(q[3], q[0], q[1], q[2]), t);
+}
+
 void write_images(Writer& w, const std::optional<KeyFrameImages>& images, const MapFileInfo& info) {
   const cv::Size size(info.image_width, info.image_height);
   cv::Mat depth_units;
   cv::Mat mask;
   if (images && images->depth_m.type() == CV_32FC1 && images->depth_m.size() == size) {
-    // Rounded to TUM's unit; beyond 13.1 m (and non-finite) stored as no measurement.
-    cv::Mat depth = images->depth_m.clone();
-    depth.setTo(0.0f, ~(depth == depth) | (depth > 65535.0 / kDepthUnitsPerMetre) | (depth < 0.0f));
-    depth.convertTo(depth_units, CV_16UC1, kDepthUnitsPerMetre);
+    depth_units = depth_units_of(images->depth_m);  // rounded to TUM's unit
     if (images->dynamic_mask.type() == CV_8UC1 && images->dynamic_mask.size() == size &&
         cv::countNonZero(images->dynamic_mask) > 0) {
       mask = images->dynamic_mask != 0;
@@ -140,10 +180,7 @@ void write_keyframe(Writer& w, const KeyFrame& kf, const std::set<KeyFrameId>& s
                     const KeyFrameImagesFn& images, const MapFileInfo& info) {
   w.put<std::uint64_t>(kf.id());
   w.put<double>(kf.timestamp_s());
-  const SE3 T_c_w = kf.T_c_w();
-  const Quatd& q = T_c_w.quaternion();
-  for (double v : {q.x(), q.y(), q.z(), q.w()}) w.put<double>(v);
-  for (int i = 0; i < 3; ++i) w.put<double>(T_c_w.translation()[i]);
+  put_pose(w, kf.T_c_w());
   const KeyFramePtr parent = kf.parent();
   w.put<std::int64_t>(parent && stored.count(parent->id()) > 0
                           ? static_cast<std::int64_t>(parent->id())
@@ -241,25 +278,55 @@ std::shared_ptr<FrameFeatures> read_features(Reader& r, const MapFileInfo& info)
   return f;
 }
 
-/// The image of a PNG block (empty for 0 bytes); `type` is what it must decode to.
-cv::Mat read_png(Reader& r, const MapFileInfo& info, int type, const char* what) {
+/// The image of a PNG block (empty for 0 bytes); `type` and `size` are what it must decode to.
+cv::Mat read_png(Reader& r, cv::Size size, int type, const char* what) {
   const std::size_t bytes = r.count(r.get<std::uint32_t>(), 1, what);
   if (bytes == 0) return {};
   const unsigned char* data = r.take(bytes);
   const cv::Mat encoded(1, static_cast<int>(bytes), CV_8UC1, const_cast<unsigned char*>(data));
   cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
-  if (image.empty() || image.type() != type || image.cols != info.image_width ||
-      image.rows != info.image_height) {
-    r.fail(fmt::format("its {} is not a {}x{} {} PNG", what, info.image_width, info.image_height,
-                       type == CV_16UC1 ? "16-bit" : "8-bit"));
+  if (image.empty() || image.type() != type || image.size() != size) {
+    r.fail(fmt::format("its {} is not a {}x{} {} PNG", what, size.width, size.height,
+                       type == CV_16UC1  ? "16-bit"
+                       : type == CV_8UC3 ? "8-bit colour"
+                                         : "8-bit"));
   }
   return image;
+}
+
+cv::Mat read_png(Reader& r, const MapFileInfo& info, int type, const char* what) {
+  return read_png(r, cv::Size(info.image_width, info.image_height), type, what);
+}
+
+void write_dense_scan(Writer& w, const DenseScan& scan, const MapFileInfo& info) {
+  const auto bad = [&](const std::string& what) {
+    return Error(
+        fmt::format("map file: dense scan anchored to keyframe {}: {}", scan.anchor, what));
+  };
+  if (scan.pixel_step < 1 || scan.pixel_step > kMaxPixelStep) {
+    throw bad(fmt::format("pixel step {} (1..{})", scan.pixel_step, kMaxPixelStep));
+  }
+  const cv::Size size = scan_size(info, scan.pixel_step);
+  if (scan.bgr.type() != CV_8UC3 || scan.bgr.size() != size || scan.depth_m.type() != CV_32FC1 ||
+      scan.depth_m.size() != size ||
+      (!scan.exclude.empty() && (scan.exclude.type() != CV_8UC1 || scan.exclude.size() != size))) {
+    throw bad(fmt::format("its images are not colour, depth and mask of {}x{} pixels", size.width,
+                          size.height));
+  }
+  w.put<std::uint64_t>(scan.anchor);
+  put_pose(w, scan.T_anchor_c);
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(scan.pixel_step));
+  write_png(w, scan.bgr);
+  write_png(w, depth_units_of(scan.depth_m));
+  write_png(w, scan.exclude.empty() || cv::countNonZero(scan.exclude) == 0
+                   ? cv::Mat()
+                   : cv::Mat(scan.exclude != 0));
 }
 
 }  // namespace
 
 void save_map_file(const Map& map, const MapFileInfo& info, const std::string& path,
-                   const KeyFrameImagesFn& images) {
+                   const KeyFrameImagesFn& images, const std::vector<DenseScan>& dense_scans) {
   // The keyframes of the spanning tree: the origin and those whose parent chain reaches it.
   // Left out are keyframes local mapping never took in (no parent yet: still queued when a worker
   // failed), with whatever hangs below them.
@@ -332,6 +399,12 @@ void save_map_file(const Map& map, const MapFileInfo& info, const std::string& p
     ++point_count;
   }
   std::memcpy(w.bytes().data() + point_count_at, &point_count, sizeof(point_count));
+  std::vector<const DenseScan*> scans;
+  for (const DenseScan& scan : dense_scans) {
+    if (stored.count(scan.anchor) > 0) scans.push_back(&scan);
+  }
+  w.put<std::uint64_t>(scans.size());
+  for (const DenseScan* scan : scans) write_dense_scan(w, *scan, info);
   while (w.bytes().size() % 8 != 0) w.put<std::uint8_t>(0);
   w.put<std::uint64_t>(checksum64(w.bytes().data(), w.bytes().size()));
   write_file_atomically(
@@ -353,10 +426,10 @@ MapFileContents load_map_file(const std::string& path, Map& map,
   }
   std::uint32_t version;
   std::memcpy(&version, bytes.data() + 8, sizeof(version));
-  if (version != kVersion) {
+  if (version < kOldestVersion || version > kVersion) {
     throw InputError::at(path, fmt::format("unsupported map file version {} (this build reads "
-                                           "version {})",
-                                           version, kVersion));
+                                           "versions {} to {})",
+                                           version, kOldestVersion, kVersion));
   }
   const std::size_t payload = bytes.size() - kChecksumBytes;
   std::uint64_t stored_checksum;
@@ -368,6 +441,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
   Reader r(path, bytes.data(), payload);
   r.take(sizeof(kMagic) + 8);
   MapFileContents contents;
+  contents.version = version;
   MapFileInfo& info = contents.info;
   info.descriptor_tag = r.get<std::uint64_t>();
   info.vocabulary_words = r.get<std::uint64_t>();
@@ -406,14 +480,8 @@ MapFileContents load_map_file(const std::string& path, Map& map,
       r.fail(fmt::format("the first keyframe must be the origin, id {}", origin_id));
     }
     const auto timestamp_s = r.get<double>();
-    double q[4];
-    for (double& v : q) v = r.get<double>();
-    Vec3d t;
-    for (int i = 0; i < 3; ++i) t[i] = r.get<double>();
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!std::isfinite(timestamp_s) || !t.allFinite() || !(std::abs(norm - 1.0) < 1e-6)) {
-      r.fail("invalid timestamp or pose (the quaternion must have norm 1)");
-    }
+    if (!std::isfinite(timestamp_s)) r.fail("invalid timestamp");
+    const SE3 T_c_w = get_pose(r, "pose");
     parents[id] = r.get<std::int64_t>();
     const std::size_t loops = r.count(r.get<std::uint32_t>(), 8, "loop edges");
     for (std::size_t i = 0; i < loops; ++i) loop_edges[id].push_back(r.get<std::uint64_t>());
@@ -425,8 +493,7 @@ MapFileContents load_map_file(const std::string& path, Map& map,
       depth_units.convertTo(images.depth_m, CV_32FC1, 1.0 / kDepthUnitsPerMetre);
       images.dynamic_mask = mask;
     }
-    auto kf = std::make_shared<KeyFrame>(id, timestamp_s, std::move(features),
-                                         SE3(Quatd(q[3], q[0], q[1], q[2]), t));
+    auto kf = std::make_shared<KeyFrame>(id, timestamp_s, std::move(features), T_c_w);
     keyframes[id] = kf;
     order.push_back(kf);
     next_keyframe_id = std::max(next_keyframe_id, id + 1);
@@ -489,12 +556,40 @@ MapFileContents load_map_file(const std::string& path, Map& map,
     next_point_id = std::max(next_point_id, p.id + 1);
     records.push_back(std::move(p));
   }
+  if (version >= 2) {
+    r.set_record("dense scans");
+    constexpr std::size_t kMinScanBytes = 8 + 56 + 4 + 3 * 4;
+    const std::size_t scans = r.count(r.get<std::uint64_t>(), kMinScanBytes, "dense scans");
+    contents.dense_scans.reserve(scans);
+    for (std::size_t k = 0; k < scans; ++k) {
+      r.set_record(fmt::format("dense scan {} of {}", k + 1, scans));
+      DenseScan scan;
+      scan.anchor = r.get<std::uint64_t>();
+      if (keyframes.count(scan.anchor) == 0) {
+        r.fail(fmt::format("anchored to keyframe {}, not in the file", scan.anchor));
+      }
+      scan.T_anchor_c = get_pose(r, "pose relative to its anchor");
+      const auto step = r.get<std::uint32_t>();
+      if (step < 1 || step > static_cast<std::uint32_t>(kMaxPixelStep)) {
+        r.fail(fmt::format("pixel step {} (1..{})", step, kMaxPixelStep));
+      }
+      scan.pixel_step = static_cast<int>(step);
+      const cv::Size size = scan_size(info, scan.pixel_step);
+      scan.bgr = read_png(r, size, CV_8UC3, "colour image");
+      const cv::Mat depth_units = read_png(r, size, CV_16UC1, "depth image");
+      scan.exclude = read_png(r, size, CV_8UC1, "exclusion mask");
+      if (scan.bgr.empty() || depth_units.empty()) r.fail("no colour or no depth image");
+      depth_units.convertTo(scan.depth_m, CV_32FC1, 1.0 / kDepthUnitsPerMetre);
+      contents.dense_scans.push_back(std::move(scan));
+    }
+  }
   r.set_record("");
   // Only zero padding may follow (fewer than 8 bytes).
   const std::size_t rest = payload - r.offset();
   const unsigned char* tail = r.take(rest);
   if (rest >= 8 || std::any_of(tail, tail + rest, [](unsigned char c) { return c != 0; })) {
-    r.fail(fmt::format("{} unexpected bytes after the last map point", rest));
+    r.fail(fmt::format("{} unexpected bytes after the {}", rest,
+                       version >= 2 ? "dense scans" : "last map point"));
   }
   for (const auto& [id, parent] : parents) {
     if (id == origin_id ? parent != kNoParent : parent == kNoParent) {

@@ -59,8 +59,72 @@ DenseMapper::~DenseMapper() {
   if (thread_.joinable()) thread_.join();
 }
 
+void DenseMapper::preload(std::vector<map::DenseScan> scans) {
+  if (finished_ || submitted_any_) {
+    throw Error("DenseMapper::preload after a keyframe was submitted or after finish()");
+  }
+  if (!octree_ || scans.empty()) return;
+  std::vector<Stored> entries;
+  entries.reserve(scans.size());
+  for (map::DenseScan& scan : scans) {
+    map::KeyFramePtr anchor = map_->keyframe(scan.anchor);
+    if (!anchor) {
+      throw Error(fmt::format("dense scan anchored to keyframe {}, which the map does not hold",
+                              scan.anchor));
+    }
+    if (scan.pixel_step != 1 && scan.pixel_step != config_.octree.pixel_stride) {
+      throw ConfigError::for_key(
+          "dense.octree.pixel_stride",
+          fmt::format("is {}, but the loaded map's dense scans were taken every {} pixels; run "
+                      "with the same stride to extend its octree",
+                      config_.octree.pixel_stride, scan.pixel_step));
+    }
+    Stored s;
+    s.keyframe = std::move(anchor);
+    s.T_anchor_c = scan.T_anchor_c;
+    s.loaded = true;
+    if (scan.pixel_step == 1 && config_.octree.pixel_stride > 1) {
+      const octomap::KeyframeScan c = octomap::subsampled(
+          {scan.anchor, SE3(), scan.bgr, scan.depth_m, scan.exclude}, config_.octree.pixel_stride);
+      s.bgr = c.bgr;
+      s.depth_m = c.depth_m;
+      s.exclude = c.exclude_mask;
+      s.pixel_step = config_.octree.pixel_stride;
+    } else {
+      s.bgr = std::move(scan.bgr);
+      s.depth_m = std::move(scan.depth_m);
+      s.exclude = std::move(scan.exclude);
+      s.pixel_step = scan.pixel_step;
+    }
+    entries.push_back(std::move(s));
+  }
+  if (!queue_) {
+    add_preloaded(std::move(entries));
+    return;
+  }
+  std::optional<DensePoseSnapshot> snapshot;
+  if (!config_.threaded) {
+    for (const Stored& s : entries) submitted_.push_back(s.keyframe);
+    snapshot = take_snapshot(submitted_);
+  }
+  if (!queue_->push(Item(Preloaded{std::move(entries), std::move(snapshot)})) && error_) {
+    std::rethrow_exception(error_);
+  }
+}
+
+void DenseMapper::add_preloaded(std::vector<Stored> scans) {
+  const std::size_t n = scans.size();
+  stored_.insert(stored_.begin() + static_cast<std::ptrdiff_t>(loaded_),
+                 std::make_move_iterator(scans.begin()), std::make_move_iterator(scans.end()));
+  loaded_ += n;
+  integrate_due(0);
+  std::lock_guard lock(stats_mutex_);
+  stats_.scans_loaded += n;
+}
+
 void DenseMapper::submit(DenseKeyframe keyframe) {
   if (finished_) throw Error("DenseMapper::submit after finish()");
+  submitted_any_ = true;
   if (!queue_) {
     process(std::move(keyframe));
     return;
@@ -131,6 +195,9 @@ void DenseMapper::handle(Item item) {
   if (auto* submitted = std::get_if<Submitted>(&item)) {
     snapshot_ = submitted->snapshot ? &*submitted->snapshot : nullptr;
     process(std::move(submitted->keyframe));
+  } else if (auto* preloaded = std::get_if<Preloaded>(&item)) {
+    snapshot_ = preloaded->snapshot ? &*preloaded->snapshot : nullptr;
+    add_preloaded(std::move(preloaded->scans));
   } else {
     auto& reset = std::get<ResetRequest>(item);
     snapshot_ = reset.snapshot ? &*reset.snapshot : nullptr;
@@ -140,6 +207,7 @@ void DenseMapper::handle(Item item) {
 
 void DenseMapper::drop_stored() {
   stored_.clear();
+  loaded_ = 0;
   if (octree_) octree_->clear();
   seen_big_change_ = big_change_index();
   std::lock_guard lock(stats_mutex_);
@@ -191,7 +259,10 @@ std::size_t DenseMapper::integrate_due(std::size_t keep_back) {
   std::vector<map::KeyFramePtr> keyframes;
   for (const std::size_t i : todo) keyframes.push_back(stored_[i].keyframe);
   const std::vector<SE3> poses = poses_of(keyframes);
-  for (std::size_t k = 0; k < todo.size(); ++k) stored_[todo[k]].T_w_c_integrated = poses[k];
+  for (std::size_t k = 0; k < todo.size(); ++k) {
+    Stored& s = stored_[todo[k]];
+    s.T_w_c_integrated = camera_pose(s, poses[k]);
+  }
   for (const std::size_t i : todo) {
     Stored& s = stored_[i];
     octree_->integrate(
@@ -210,7 +281,8 @@ bool DenseMapper::poses_moved_since_integration() const {
   map_->read_consistent([&] {
     for (const Stored& s : stored_) {
       if (!s.integrated) continue;
-      const SE3 T_now_then = tracking::resolved_T_w_c(s.keyframe).inverse() * s.T_w_c_integrated;
+      const SE3 T_now_then =
+          camera_pose(s, tracking::resolved_T_w_c(s.keyframe)).inverse() * s.T_w_c_integrated;
       max_m = std::max(max_m, T_now_then.translation().norm());
       max_rad = std::max(max_rad, T_now_then.rotation_angle());
     }
@@ -225,12 +297,15 @@ bool DenseMapper::poses_moved_since_integration() const {
 
 void DenseMapper::process(DenseKeyframe item) {
   Stopwatch watch;
-  Stored stored{item.keyframe, item.bgr,  item.depth_m, cv::Mat(),
-                cv::Mat(),     cv::Mat(), nullptr,      SE3()};
+  Stored stored;
+  stored.keyframe = item.keyframe;
+  stored.bgr = item.bgr;
+  stored.depth_m = item.depth_m;
   const cv::Mat mask =
       item.dynamic_mask.empty() ? cv::Mat::zeros(item.bgr.size(), CV_8UC1) : item.dynamic_mask;
   if (config_.inpainting_enabled && cv::countNonZero(mask) > 0) {
-    const std::size_t n = std::min(stored_.size(), source_window());
+    // Loaded scans (at the front of stored_) are no sources.
+    const std::size_t n = std::min(stored_.size() - loaded_, source_window());
     // The poses of the keyframe and its sources, in one reading: local BA and loop correction
     // write poses under the map's update lock, and a repair from two world frames would stay in
     // the stored images. A culled keyframe is at its parent-resolved pose, since its own froze
@@ -390,6 +465,39 @@ std::vector<std::string> DenseMapper::write_outputs(const std::string& dir,
     io::write_png(p, octree_->render(true, 1), "the map's oblique view");
   });
   return written;
+}
+
+std::vector<map::DenseScan> DenseMapper::dense_scans() const {
+  if (!finished_) throw Error("DenseMapper::dense_scans before finish()");
+  std::vector<map::DenseScan> scans;
+  if (!octree_) return scans;
+  const int stride = config_.octree.pixel_stride;
+  map_->read_consistent([&] {
+    for (const Stored& s : stored_) {
+      if (s.depth_m.empty()) continue;
+      map::KeyFramePtr anchor = s.keyframe;
+      while (anchor->is_bad() && anchor->parent()) anchor = anchor->parent();
+      map::DenseScan scan;
+      scan.anchor = anchor->id();
+      scan.T_anchor_c = tracking::resolved_T_w_c(anchor).inverse() *
+                        camera_pose(s, tracking::resolved_T_w_c(s.keyframe));
+      if (s.pixel_step == 1 && stride > 1) {
+        const octomap::KeyframeScan c =
+            octomap::subsampled({s.keyframe->id(), SE3(), s.bgr, s.depth_m, s.exclude}, stride);
+        scan.bgr = c.bgr;
+        scan.depth_m = c.depth_m;
+        scan.exclude = c.exclude_mask;
+        scan.pixel_step = stride;
+      } else {
+        scan.bgr = s.bgr;
+        scan.depth_m = s.depth_m;
+        scan.exclude = s.exclude;
+        scan.pixel_step = s.pixel_step;
+      }
+      scans.push_back(std::move(scan));
+    }
+  });
+  return scans;
 }
 
 DenseStats DenseMapper::stats() const {

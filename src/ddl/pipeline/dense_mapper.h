@@ -30,6 +30,7 @@
 #include "ddl/io/image_output.h"
 #include "ddl/map/keyframe.h"
 #include "ddl/map/map.h"
+#include "ddl/map/map_file.h"
 #include "ddl/octomap/octree_map.h"
 
 namespace ddl::pipeline {
@@ -83,7 +84,8 @@ struct DenseStats {
   long filled_pixels = 0;
   long image_filled_pixels = 0;
   std::size_t octree_rebuilds = 0;
-  std::size_t resets = 0;  // map resets: stored keyframes and the octree dropped
+  std::size_t resets = 0;        // map resets: stored keyframes and the octree dropped
+  std::size_t scans_loaded = 0;  // dense scans of a loaded map file (preload)
   /// Most bytes the stored keyframes' images held at once: the inpainting sources at full
   /// resolution, older keyframes only with the pixels an octree rebuild uses.
   std::size_t peak_stored_image_bytes = 0;
@@ -98,6 +100,13 @@ class DenseMapper {
   DenseMapper& operator=(const DenseMapper&) = delete;
 
   void submit(DenseKeyframe keyframe);
+  /// Before the first submit(): the dense scans of a map file loaded into the map
+  /// (map::MapFileContents::dense_scans), each anchored to one of its keyframes. They go into the
+  /// octree at once and with every rebuild, at their anchor's current pose; they are never
+  /// inpainting sources. Without an octree they are ignored. A scan whose pixel step is neither
+  /// 1 nor the octree's pixel_stride cannot be integrated: ConfigError naming
+  /// dense.octree.pixel_stride. ddl::Error after a submit() or for an anchor not in the map.
+  void preload(std::vector<map::DenseScan> scans);
   /// The map was reset (tracking lost before the map had enough keyframes): the keyframes
   /// stored so far live in a world frame that no longer exists, so they are dropped as
   /// inpainting sources and the octree is emptied. Ordered with submit(): in threaded mode it
@@ -112,6 +121,11 @@ class DenseMapper {
   /// `dir` cannot be created.
   std::vector<std::string> write_outputs(const std::string& dir,
                                          std::vector<std::string>& errors) const;
+
+  /// After finish(): every stored keyframe's scan at the octree's pixel stride, anchored to its
+  /// nearest keyframe that was not culled (itself, unless culled) with its pose relative to it,
+  /// for a map file (map::save_map_file). Empty without an octree; ddl::Error before finish().
+  std::vector<map::DenseScan> dense_scans() const;
 
   DenseStats stats() const;
   /// The repaired keyframes of save_inpainted_dir that could not be written (io/image_output.h).
@@ -131,6 +145,10 @@ class DenseMapper {
     SE3 T_w_c_integrated;     // the pose it went into the octree at (rebuild when it moved)
     bool integrated = false;  // in the octree (octree_delay_keyframes)
     int pixel_step = 1;       // > 1: compacted to the octree's pixels (no longer a source)
+    /// Loaded from a map file (preload): the scan's camera relative to `keyframe`, its anchor
+    /// (identity for the run's own keyframes). Loaded scans are never inpainting sources.
+    SE3 T_anchor_c;
+    bool loaded = false;
   };
   struct ResetRequest {
     std::optional<DensePoseSnapshot> snapshot;
@@ -139,7 +157,11 @@ class DenseMapper {
     DenseKeyframe keyframe;
     std::optional<DensePoseSnapshot> snapshot;
   };
-  using Item = std::variant<Submitted, ResetRequest>;
+  struct Preloaded {
+    std::vector<Stored> scans;
+    std::optional<DensePoseSnapshot> snapshot;
+  };
+  using Item = std::variant<Submitted, ResetRequest, Preloaded>;
   /// The poses of `keyframes` and the big-change index now (the caller's thread).
   DensePoseSnapshot take_snapshot(const std::vector<map::KeyFramePtr>& keyframes) const;
   /// The map's big-change index as the current step sees it.
@@ -150,6 +172,11 @@ class DenseMapper {
   void handle(Item item);
   void process(DenseKeyframe item);
   void drop_stored();
+  void add_preloaded(std::vector<Stored> scans);
+  /// The world pose of a stored keyframe's camera, given its keyframe's (anchor's) pose.
+  static SE3 camera_pose(const Stored& s, const SE3& T_w_keyframe) {
+    return T_w_keyframe * s.T_anchor_c;
+  }
   /// Clears the octree and integrates every stored keyframe but the newest `keep_back` at its
   /// current pose.
   void rebuild_octree(std::size_t keep_back);
@@ -169,7 +196,9 @@ class DenseMapper {
   camera::PinholeCamera camera_;
   std::shared_ptr<const map::Map> map_;
   std::unique_ptr<octomap::OctreeMap> octree_;
-  std::vector<Stored> stored_;  // all repaired keyframes, in insertion order
+  std::vector<Stored> stored_;  // all repaired keyframes, in insertion order (loaded ones first)
+  std::size_t loaded_ = 0;      // how many of stored_ are loaded scans (at its front)
+  bool submitted_any_ = false;
   /// The snapshot the worker's current step reads instead of the map (nullptr: the map).
   const DensePoseSnapshot* snapshot_ = nullptr;
   /// Caller side of deterministic_thread: the keyframes submitted since the last reset, whose

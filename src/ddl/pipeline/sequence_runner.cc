@@ -107,6 +107,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
             {"filled_pixels", s.dense.filled_pixels},
             {"image_filled_pixels", s.dense.image_filled_pixels},
             {"octree_rebuilds", s.dense.octree_rebuilds},
+            {"scans_loaded", s.dense.scans_loaded},
             {"peak_stored_image_bytes", s.dense.peak_stored_image_bytes}}}};
 }
 

@@ -234,14 +234,19 @@ map::MapFileContents System::load_map(const std::string& path) {
       dynamic_->remember_keyframe(keyframe, it->second.depth_m, it->second.dynamic_mask);
     }
   }
+  // The scans the dense stage kept in the run that made the map: its octree grows on them.
+  dense_->preload(contents.dense_scans);
   tracker_->start_in_loaded_map();
   map_loaded_ = true;
   stats_.keyframes_loaded = contents.keyframes;
   stats_.map_points_loaded = contents.map_points;
   stats_.keyframe_depth_images_loaded = contents.images.size();
-  spdlog::info("{}: map loaded in {:.0f} ms: {} keyframes ({} with depth images), {} map points",
-               path, watch.elapsed_ms(), contents.keyframes, contents.images.size(),
-               contents.map_points);
+  spdlog::info(
+      "{}: map loaded in {:.0f} ms: {} keyframes ({} with depth images), {} map points, {} dense "
+      "scans{}",
+      path, watch.elapsed_ms(), contents.keyframes, contents.images.size(), contents.map_points,
+      contents.dense_scans.size(),
+      contents.dense_scans.empty() || config_.dense.octomap_enabled ? "" : " (no octree: unused)");
   return contents;
 }
 
@@ -256,8 +261,9 @@ void System::save_map(const std::string& path) const {
   info.descriptor_tag = vocabulary_->descriptor_tag();
   info.vocabulary_words = vocabulary_->word_count();
   const Stopwatch watch;
-  map::save_map_file(*map_, info, path,
-                     [this](map::KeyFrameId id) { return dynamic_->keyframe_images(id); });
+  map::save_map_file(
+      *map_, info, path, [this](map::KeyFrameId id) { return dynamic_->keyframe_images(id); },
+      dense_->dense_scans());
   spdlog::info("{}: sparse map written in {:.0f} ms", path, watch.elapsed_ms());
 }
 
