@@ -320,8 +320,8 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--save-inpainted", args->save_inpainted,
                 "Write repaired keyframes to <out>/inpainted/");
   cmd->add_option("--save-map", args->save_map,
-                  "Write the sparse map (keyframes, map points) to FILE at the end of the run, "
-                  "also when it is interrupted (docs/map-files.md)");
+                  "Write the sparse map (keyframes, map points, the octree's scans) to FILE at "
+                  "the end of the run, also when it is interrupted (docs/map-files.md)");
   cmd->add_option("--load-map", args->load_map,
                   "Start in the sparse map FILE written by --save-map with the same camera and "
                   "vocabulary: the first frames relocalize in it, and the run extends it "
