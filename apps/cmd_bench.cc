@@ -4,11 +4,13 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <set>
@@ -17,7 +19,9 @@
 
 #include "cli_support.h"
 #include "commands.h"
+#include "ddl/config/camera_config.h"
 #include "ddl/config/dataset_config.h"
+#include "ddl/config/system_config.h"
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
 #include "ddl/eval/benchmark_tables.h"
@@ -121,6 +125,51 @@ json settings_json(const BenchArgs& args, std::size_t sequences) {
           {"reuse_baseline", args.reuse_baseline}};
 }
 
+std::string file_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// What of an effective configuration decides a --no-dynamic run's trajectory: all but the
+/// dynamic-removal and dense-stage sections and the mask pictures switch.
+std::string trajectory_settings(const std::string& config_yaml) {
+  YAML::Node node = YAML::Load(config_yaml);
+  for (const char* key : {"dynamic", "dense", "save_masks"}) node.remove(key);
+  YAML::Emitter out;
+  out << node;
+  return out.c_str();
+}
+
+/// Why the finished --no-dynamic run in `dir` (its `summary`) cannot stand in for `run`, or
+/// std::nullopt when it can: it must have had the same part of the sequence, the same camera and
+/// the same settings but for those that do not change its trajectory.
+std::optional<std::string> reuse_mismatch(const json& summary, const fs::path& dir,
+                                          const RunArgs& run) {
+  if (summary.value("first_frame", json()) != json(run.first_frame) ||
+      summary.value("max_frames", json()) != json(run.max_frames)) {
+    return fmt::format(
+        "it ran with first frame {} and max frames {}, this bench asks for {} and {}",
+        summary.value("first_frame", json()).dump(), summary.value("max_frames", json()).dump(),
+        run.first_frame, run.max_frames);
+  }
+  const camera::PinholeCamera camera = config::resolve_dataset_camera(
+      run.sequence, run.camera, io::parse_dataset_kind(run.dataset_kind, "--dataset-kind"));
+  if (file_text(dir / "camera.yaml") != config::camera_to_yaml(camera)) {
+    return std::string("its camera.yaml is not this bench's camera of the sequence");
+  }
+  try {
+    if (trajectory_settings(file_text(dir / "config.yaml")) !=
+        trajectory_settings(config::system_config_to_yaml(make_system_config(run)))) {
+      return std::string(
+          "its config.yaml differs from the baseline's settings (beyond dynamic, dense and "
+          "save_masks)");
+    }
+  } catch (const YAML::Exception& e) {
+    return fmt::format("its config.yaml cannot be read: {}", e.what());
+  }
+  return std::nullopt;
+}
+
 /// The summary.json of a finished run in `dir` (not interrupted, not failed), if there is one.
 std::optional<json> finished_summary(const fs::path& dir) {
   std::ifstream in(dir / "summary.json");
@@ -193,10 +242,16 @@ int bench(const BenchArgs& args) {
       run.no_dynamic = !dynamic;
       if (!dynamic && args.reuse_baseline) {
         if (std::optional<json> summary = finished_summary(run.output_dir)) {
-          std::fprintf(stderr, "bench [%zu/%zu] %s: reusing %s/summary.json\n", i + 1,
-                       sequences.size(), seq.name.c_str(), run.output_dir.c_str());
-          row.baseline = std::move(*summary);
-          continue;
+          if (const std::optional<std::string> why =
+                  reuse_mismatch(*summary, run.output_dir, run)) {
+            std::fprintf(stderr, "bench [%zu/%zu] %s: not reusing %s: %s\n", i + 1,
+                         sequences.size(), seq.name.c_str(), run.output_dir.c_str(), why->c_str());
+          } else {
+            std::fprintf(stderr, "bench [%zu/%zu] %s: reusing %s/summary.json\n", i + 1,
+                         sequences.size(), seq.name.c_str(), run.output_dir.c_str());
+            row.baseline = std::move(*summary);
+            continue;
+          }
         }
       }
       try {

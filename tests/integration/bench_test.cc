@@ -182,6 +182,24 @@ TEST_F(Bench, WritesBothColumnsAndTheImprovement) {
   EXPECT_TRUE(reused["settings"]["reuse_baseline"].get<bool>());
   EXPECT_EQ(reused["ate"]["rows"][0]["baseline"], tables["ate"]["rows"][0]["baseline"]);
   EXPECT_EQ(reused["ate"]["rows"][0]["ours"], tables["ate"]["rows"][0]["ours"]);  // deterministic
+
+  // A baseline made with other settings is not reused (until stop 32 it was, silently): first
+  // tracking settings of its own (the same frames), then fewer frames.
+  const fs::path baseline = *root_ / "bench_reuse_baseline.yaml";
+  std::ofstream(baseline) << "tracking:\n  motion_prior:\n    enabled: false\n";
+  for (const std::string& other :
+       {" --baseline-config '" + baseline.string() + "'", std::string(" --max-frames 30")}) {
+    const int rerun = run_shell(
+        command("--sequences '" + (*root_ / "walk").string() + "' --out '" + out.string() +
+                "' --no-octomap --no-inpainting --segmentation none --config '" + config.string() +
+                "' --reuse-baseline" + other),
+        *root_ / "bench_rerun.log", &log);
+    ASSERT_EQ(rerun, 0) << log;
+    EXPECT_NE(log.find("walk: not reusing"), std::string::npos) << other << "\n" << log;
+  }
+  const json last = read_json(out / "walk" / "no_dynamic" / "summary.json");
+  EXPECT_EQ(last["max_frames"], 30);
+  EXPECT_EQ(last["frames_processed"], 30);
 }
 
 TEST_F(Bench, BaselineConfigSetsTheNoDynamicColumnOnly) {

@@ -275,6 +275,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["sequence"] = dataset.name();
   summary["frames_in_sequence"] = dataset.size();
   summary["frames_processed"] = done;
+  summary["first_frame"] = options.first_frame;
+  summary["max_frames"] = options.max_frames;
   summary["interrupted"] = outcome.interrupted;
   summary["playback_rate"] = pacer ? nlohmann::json(options.playback_rate) : nlohmann::json();
   summary["frames_dropped"] = dropped;
