@@ -164,6 +164,13 @@ TEST_F(BadInputTest, MalformedFramesFileNamesFileAndLine) {
   const std::string nan_msg = input_error_of(inputs_);
   expect_contains(nan_msg, inputs_.frames_path + ":3:");
   expect_contains(nan_msg, "not finite");
+  // A list of another sequence: no frame inside the ground truth's span (review, stop 32: it
+  // printed "0 of 0 frames (nan %)" and exited 0).
+  inputs_.frames_path =
+      test::write_text(dir_.file("rgb_other.txt"), "# rgb\n500.0 rgb/a.png\n501.0 rgb/b.png\n");
+  const std::string other_msg = input_error_of(inputs_);
+  expect_contains(other_msg, inputs_.frames_path);
+  expect_contains(other_msg, "ground truth's time span");
 }
 
 // --align-scale against an estimate that never moved: the scale is undefined, an input fault

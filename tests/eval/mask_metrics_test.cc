@@ -129,10 +129,18 @@ TEST(BenchmarkTables, ImprovementAsInThePaper) {
   EXPECT_TRUE(t["skipped"].is_array());
 
   const std::string md = benchmark_tables_markdown(t);
-  EXPECT_NE(md.find("| seq_a | 0.1000 | 0.0500 | 0.0400 | - | 0.0200 | 0.0100 | 0.0080 | - | "
+  EXPECT_NE(md.find("| seq_a | 0.1000 | 0.0500 | 0.0400 | - | 0.0200 | 0.0100 | 0.00800 | - | "
                     "80.00% | 80.00% | 80.00% | - |"),
             std::string::npos)
       << md;
+  // Sub-millimetre errors keep three significant digits (they showed as 0.0009 and 0.0008 beside
+  // an improvement of 17.4% that those numbers could not give).
+  const std::vector<BenchmarkRow> small = {
+      {"seq_b", fake_summary(0.000712, 3.0), fake_summary(0.000862, 4.0)}};
+  const std::string small_md =
+      benchmark_tables_markdown(benchmark_tables(small, {{"mode", "deterministic"}}, nullptr));
+  EXPECT_NE(small_md.find("| seq_b | 0.000862 |"), std::string::npos) << small_md;
+  EXPECT_NE(small_md.find("| 0.000712 |"), std::string::npos) << small_md;
   EXPECT_NE(md.find("Table 3"), std::string::npos);
 }
 

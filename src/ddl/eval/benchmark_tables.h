@@ -31,7 +31,8 @@ double improvement_percent(double baseline, double ours);
 nlohmann::json benchmark_tables(const std::vector<BenchmarkRow>& rows,
                                 const nlohmann::json& settings, const nlohmann::json& skipped);
 
-/// tables.md: the same tables as Markdown (numbers with 4 significant decimals, "-" for none).
+/// tables.md: the same tables as Markdown (errors with at least 4 decimals and 3 significant
+/// digits, mask scores with 3 decimals, "-" for none).
 std::string benchmark_tables_markdown(const nlohmann::json& tables);
 
 }  // namespace ddl::eval

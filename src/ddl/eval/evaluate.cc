@@ -83,6 +83,14 @@ EvalResult evaluate(const EvalInputs& inputs, const EvalOptions& options) {
   r.inputs = inputs;
   if (frames) {
     r.tracked = compute_tracked(*frames, gt, est, options.offset_s, options.max_difference_s);
+    if (r.tracked->frames_in_gt_span == 0) {
+      throw InputError::at(
+          inputs.frames_path,
+          fmt::format("none of its {} frames lies inside the ground truth's time span [{:.6f}, "
+                      "{:.6f}] (with --offset {} s): is it the frame list of this sequence?",
+                      r.tracked->frames_total, gt.front().timestamp_s, gt.back().timestamp_s,
+                      options.offset_s));
+    }
   }
   return r;
 }

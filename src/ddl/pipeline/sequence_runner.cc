@@ -336,10 +336,18 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
     }
     if (groundtruth) {
       try {
-        const eval::EvalResult result =
+        eval::EvalResult result =
             eval::evaluate(*groundtruth, system.camera_trajectory(), {}, *gt, camera_path.string());
         // The report and plots are outputs: failing to write them fails the run (output_errors),
         // not the evaluation.
+        // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
+        // processed frames inside the ground-truth span, those with an estimated pose. Until
+        // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
+        // could push it above 1 (found by review). Part of the result since stop 32, so that
+        // eval.json and summary.json agree (eval.json said "unavailable" before).
+        result.tracked =
+            eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
+        result.inputs.frames_path = "(the frames this run processed)";
         const fs::path eval_dir = out_dir / "eval";
         write_output([&] {
           create_folder(eval_dir, "the evaluation");
@@ -353,13 +361,10 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
           }
         });
         nlohmann::json ev = eval::to_json(result);
-        // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
-        // processed frames inside the ground-truth span, those with an estimated pose. Until
-        // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
-        // could push it above 1 (found by review).
-        const eval::TrackedStats tracked =
-            eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
-        ev["tracked_ratio"] = tracked.frames_in_gt_span > 0 ? tracked.ratio : 0.0;
+        // null when no processed frame lies inside the ground truth's span.
+        ev["tracked_ratio"] = result.tracked->frames_in_gt_span > 0
+                                  ? nlohmann::json(result.tracked->ratio)
+                                  : nlohmann::json();
         summary["evaluation"] = ev;
         if (result.rpe_error.empty()) {
           spdlog::info("ATE RMSE {:.4f} m over {} poses, RPE {:.4f} m/s {:.3f} deg/s",
