@@ -422,6 +422,7 @@ TEST(Inpainting, SkippingUnreachableBlocksChangesNothing) {
     with_remnant.bgr = with_remnant.bgr.clone();
     with_remnant.depth_m = with_remnant.depth_m.clone();
     with_remnant.exclude_mask = with_remnant.exclude_mask.clone();
+    with_remnant.repaired_mask = with_remnant.repaired_mask.clone();
     cv::Mat background_depth;
     target.background_depth_raw.convertTo(background_depth, CV_32F, 1.0 / cam.depth_factor);
     const SE3 T_src_cur = with_remnant.T_w_c.inverse() * target.T_w_c;

@@ -289,9 +289,56 @@ TEST(OctreeMap, FilesOpenWithTheOctomapLibrary) {
     const double wall_cells = (2 * 3.0 * 320.1 / 535.4) * (2 * 3.0 * 247.6 / 539.2) / 0.0025;
     EXPECT_GT(static_cast<double>(cells.size()), 0.95 * wall_cells) << file;
   }
-  const cv::Mat top = map.render(false, 1);
+  const cv::Mat top = map.render(false, Vec3d(0.0, -1.0, 0.0));
   EXPECT_GT(cv::countNonZero(top.reshape(1) != 255), 1000);
   fs::remove_all(dir);
+}
+
+// The top view shows what is on top: a green table above a red floor (the SLAM world's y points
+// down, so up is -y), where the world's x and z put it (x right, z up the image), not mirrored.
+// Until stop 32 the up axis had no sign and +y was taken as up: the view was from below, and the
+// floor hid the table (found by review).
+TEST(OctreeMap, TheTopViewShowsWhatIsAboveFromAbove) {
+  const auto cam = synthetic::tum3_camera();
+  OctreeConfig config;
+  config.pixel_stride = 1;
+  OctreeMap map(config, cam);
+  // A camera 2 m above the floor (y = +1.5 is the floor, y = +0.8 the table top), looking down:
+  // its z axis is the world's +y, its x axis the world's x.
+  const SE3 T_w_c(Quatd(Eigen::AngleAxisd(-M_PI / 2.0, Vec3d::UnitX())), Vec3d(0.0, -0.5, 0.0));
+  ASSERT_NEAR((T_w_c * Vec3d(0.0, 0.0, 1.3)).y(), 0.8, 1e-9);  // the premise: 1.3 m deep is the top
+  KeyframeScan floor;
+  floor.T_w_c = T_w_c;
+  floor.bgr = cv::Mat(cam.height, cam.width, CV_8UC3, cv::Scalar(0, 0, 255));  // red
+  floor.depth_m = cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  // First the bare floor, then the table put on it (world x in [0.2, 0.8], z in [0.2, 0.6]): the
+  // floor stays under the table, so a view from below shows floor there.
+  map.integrate(floor);
+  KeyframeScan table = floor;
+  table.bgr = floor.bgr.clone();
+  table.depth_m = floor.depth_m.clone();
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const Vec3d p_w = T_w_c * cam.unproject(u, v, 1.3);
+      if (p_w.x() >= 0.2 && p_w.x() <= 0.8 && p_w.z() >= 0.2 && p_w.z() <= 0.6) {
+        table.depth_m.at<float>(v, u) = 1.3f;
+        table.bgr.at<cv::Vec3b>(v, u) = {0, 255, 0};
+      }
+    }
+  }
+  map.integrate(table);
+  const cv::Mat top = map.render(false, Vec3d(0.0, -1.0, 0.0));
+  cv::Mat green, red;
+  cv::inRange(top, cv::Scalar(0, 200, 0), cv::Scalar(60, 255, 60), green);
+  cv::inRange(top, cv::Scalar(0, 0, 200), cv::Scalar(60, 60, 255), red);
+  EXPECT_GT(cv::countNonZero(green), 5000) << "the table is hidden under the floor";
+  EXPECT_GT(cv::countNonZero(red), 5000);
+  // World +x is screen right, world +z screen up: the table lies in the upper right quarter.
+  const cv::Moments m = cv::moments(green, true);
+  ASSERT_GT(m.m00, 0.0);
+  EXPECT_GT(m.m10 / m.m00, top.cols / 2.0);
+  EXPECT_LT(m.m01 / m.m00, top.rows / 2.0);
+  EXPECT_THROW(map.render(false, Vec3d::Zero()), Error);
 }
 
 TEST(OctreeMap, ReadingExpandsPrunedLeavesIntoVoxels) {

@@ -190,7 +190,10 @@ void OctreeMap::write_ply(const std::string& path) const {
   });
 }
 
-cv::Mat OctreeMap::render(bool oblique, int up_axis, int width, int height) const {
+cv::Mat OctreeMap::render(bool oblique, const Vec3d& up_w, int width, int height) const {
+  if (!(up_w.norm() > 1e-9) || !up_w.allFinite()) {
+    throw Error("octree rendering: the up direction must be a non-zero world vector");
+  }
   cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
   std::vector<std::pair<Vec3d, cv::Vec3b>> voxels;
   Vec3d lo = Vec3d::Constant(1e9), hi = Vec3d::Constant(-1e9);
@@ -204,13 +207,18 @@ cv::Mat OctreeMap::render(bool oblique, int up_axis, int width, int height) cons
     voxels.push_back({v, cv::Vec3b(c.b, c.g, c.r)});
   }
   if (voxels.empty()) return image;
-  // View rotation: the "up" world axis points out of the screen in the top view; the oblique
-  // view tilts it by 50 degrees and turns it by 30 degrees.
-  const int a = (up_axis + 1) % 3, b = (up_axis + 2) % 3;
-  Mat3d axes = Mat3d::Zero();
-  axes(0, a) = 1.0;
-  axes(1, b) = 1.0;
-  axes(2, up_axis) = 1.0;
+  // View rotation, right-handed (a mirror image otherwise): `up_w` points out of the screen, at
+  // the viewer, in the top view; screen right is the world x axis (z when up is along x) made
+  // perpendicular to it, and screen up completes the frame. The oblique view tilts it by 50
+  // degrees and turns it by 30 degrees. Until stop 32 the up axis had no sign: the SLAM world's
+  // +y, which points down, was taken as up, so the top view showed the map from below.
+  const Vec3d up = up_w.normalized();
+  const Vec3d reference = std::abs(up.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitZ();
+  const Vec3d right = (reference - reference.dot(up) * up).normalized();
+  Mat3d axes;
+  axes.row(0) = right.transpose();
+  axes.row(1) = up.cross(right).transpose();
+  axes.row(2) = up.transpose();
   Mat3d view = axes;
   if (oblique) {
     view = Mat3d(Eigen::AngleAxisd(-50.0 * M_PI / 180.0, Vec3d::UnitX()) *

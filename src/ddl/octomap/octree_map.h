@@ -3,8 +3,8 @@
 // pose) are integrated into an octomap::ColorOcTree by ray casting, so free space along each ray
 // clears what moving objects left in earlier frames. Pixels still marked dynamic (unfilled by
 // inpainting) are not inserted as endpoints.
-// OctreeMap is not thread-safe by itself; OctreeMapper (octree_mapper.h) owns one in its own
-// thread.
+// OctreeMap is not thread-safe by itself; pipeline::DenseMapper owns one and uses it from its
+// own thread.
 
 #include <cstdint>
 #include <memory>
@@ -81,8 +81,10 @@ class OctreeMap {
   void write_bt(const std::string& path) const;
   /// ASCII PLY of occupied voxel centres with colour.
   void write_ply(const std::string& path) const;
-  /// PNG rendering: top view (looking down the world axis `up_axis`, 0=x,1=y,2=z) or oblique.
-  cv::Mat render(bool oblique, int up_axis, int width = 800, int height = 600) const;
+  /// PNG rendering of the occupied voxels: top view (looking down, against the world direction
+  /// `up_w`, which points at the viewer) or oblique (tilted from there). Throws ddl::Error for a
+  /// zero `up_w`.
+  cv::Mat render(bool oblique, const Vec3d& up_w, int width = 800, int height = 600) const;
 
   OctreeStats stats() const;
   const ::octomap::ColorOcTree& tree() const { return *tree_; }

@@ -239,13 +239,21 @@ void DenseMapper::finish() {
   // Poses keep moving until the last global BA, and local BA refines each keyframe after it was
   // integrated (in deterministic mode the dense stage runs before local mapping sees the
   // keyframe): integrate once more at the final poses when they moved.
+  // Timed like the rebuilds and integrations during the run (until stop 32 these were counted
+  // in octree_rebuilds but missing from timing_ms).
   if (!octree_) return;
+  Stopwatch watch;
   if (map_->big_change_index() != seen_big_change_) {
     rebuild_octree(0);
+    timings_.record("octomap_rebuild", watch.elapsed_ms());
     return;
   }
-  integrate_due(0);  // the keyframes still waiting for their delay
-  if (poses_moved_since_integration()) rebuild_octree(0);
+  if (integrate_due(0) > 0) timings_.record("octomap", watch.elapsed_ms());  // delayed keyframes
+  if (poses_moved_since_integration()) {
+    watch.reset();
+    rebuild_octree(0);
+    timings_.record("octomap_rebuild", watch.elapsed_ms());
+  }
 }
 
 std::size_t DenseMapper::integrate_due(std::size_t keep_back) {
@@ -456,13 +464,15 @@ std::vector<std::string> DenseMapper::write_outputs(const std::string& dir,
   write("map.ot", [&](const std::string& p) { octree_->write_ot(p); });
   write("map.bt", [&](const std::string& p) { octree_->write_bt(p); });
   write("map.ply", [&](const std::string& p) { octree_->write_ply(p); });
-  // The map lives in the SLAM world frame, the first camera's (y points down, roughly
-  // "up" reversed), so the top view looks along y.
+  // The map lives in the SLAM world frame, the first camera's: its y points down (roughly, as
+  // the camera was held), so up is -y and the top view looks along +y, with the first camera's
+  // viewing direction (z) pointing up the image.
+  const Vec3d kUp(0.0, -1.0, 0.0);
   write("map_top.png", [&](const std::string& p) {
-    io::write_png(p, octree_->render(false, 1), "the map's top view");
+    io::write_png(p, octree_->render(false, kUp), "the map's top view");
   });
   write("map_oblique.png", [&](const std::string& p) {
-    io::write_png(p, octree_->render(true, 1), "the map's oblique view");
+    io::write_png(p, octree_->render(true, kUp), "the map's oblique view");
   });
   return written;
 }
