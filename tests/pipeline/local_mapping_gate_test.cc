@@ -58,6 +58,30 @@ TEST(LocalMappingGate, MappingIsIdleOnlyWithNoKeyframeQueuedOrInProgress) {
   EXPECT_FALSE(gate.mapping_idle());  // nobody will process it
 }
 
+// Threaded mode's young map (threaded_lockstep_keyframes): tracking waits until every queued
+// keyframe is processed; an exited worker ends the wait.
+TEST(LocalMappingGate, WaitingUntilIdleLastsUntilEveryQueuedKeyframeIsProcessed) {
+  LocalMappingGate gate;
+  gate.wait_until_idle();  // idle: returns at once
+  queue_keyframe(gate);
+  queue_keyframe(gate);
+  auto waited = std::async(std::launch::async, [&] { gate.wait_until_idle(); });
+  ASSERT_EQ(waited.wait_for(kBlocked), std::future_status::timeout);
+  gate.begin_keyframe();
+  gate.end_keyframe();
+  ASSERT_EQ(waited.wait_for(kBlocked), std::future_status::timeout);  // one still queued
+  gate.begin_keyframe();
+  ASSERT_EQ(waited.wait_for(kBlocked), std::future_status::timeout);  // in progress
+  gate.end_keyframe();
+  ASSERT_EQ(waited.wait_for(kReturns), std::future_status::ready);
+
+  queue_keyframe(gate);
+  auto orphaned = std::async(std::launch::async, [&] { gate.wait_until_idle(); });
+  ASSERT_EQ(orphaned.wait_for(kBlocked), std::future_status::timeout);
+  gate.worker_exited();
+  ASSERT_EQ(orphaned.wait_for(kReturns), std::future_status::ready);
+}
+
 TEST(LocalMappingGate, TrackingCreatesNoKeyframeWhileAStopIsRequested) {
   LocalMappingGate gate;
   gate.pause();

@@ -29,6 +29,11 @@ bool LocalMappingGate::mapping_idle() const {
   return !worker_exited_ && !in_progress_ && taken_ >= pushed_;
 }
 
+void LocalMappingGate::wait_until_idle() const {
+  std::unique_lock lock(mutex_);
+  changed_.wait(lock, [&] { return worker_exited_ || (!in_progress_ && taken_ >= pushed_); });
+}
+
 void LocalMappingGate::begin_keyframe() {
   std::unique_lock lock(mutex_);
   changed_.wait(lock, [&] { return stops_granted_ == 0; });

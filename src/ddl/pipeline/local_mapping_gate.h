@@ -48,6 +48,8 @@ class LocalMappingGate {
   /// System read the queue's size and a busy flag the worker set after taking it, which left a
   /// moment in which a keyframe in flight looked idle). False once the worker has exited.
   bool mapping_idle() const;
+  /// Blocks until mapping_idle() holds or the worker has exited.
+  void wait_until_idle() const;
   /// Polled by local BA: raised when a newer keyframe is queued or loop closing asks to stop.
   const std::atomic<bool>* abort_flag() const { return &abort_local_ba_; }
 
@@ -68,7 +70,7 @@ class LocalMappingGate {
   bool drained() const;  // under mutex_
 
   mutable std::mutex mutex_;
-  std::condition_variable changed_;
+  mutable std::condition_variable changed_;
   int stop_requests_ = 0;  // pause() calls not yet resumed
   int stops_granted_ = 0;  // ... of which hold mapping now
   bool insertion_open_ = false;

@@ -21,6 +21,9 @@ void SystemConfig::validate() const {
   if (deterministic_mapping_busy_frames < 0) {
     throw ConfigError::for_key("deterministic_mapping_busy_frames", "must be >= 0");
   }
+  if (threaded_lockstep_keyframes < 0) {
+    throw ConfigError::for_key("threaded_lockstep_keyframes", "must be >= 0");
+  }
   tracking.validate();
   mapping.validate();
   loop.validate();
@@ -292,6 +295,16 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     }
     cnn_exclusion = dynamic_->exclusion_mask(masks.cnn);
   }
+  // A young map in threaded mode (fewer keyframes created since it began, or was reset, than
+  // threaded_lockstep_keyframes): its keyframes are processed before the next frame is tracked.
+  // The wait ends at once when the worker has exited.
+  if (config_.mode == RunMode::kThreaded &&
+      stats_.keyframes_created - keyframes_before_map_ <
+          static_cast<std::size_t>(config_.threaded_lockstep_keyframes)) {
+    Stopwatch wait;
+    mapping_gate_.wait_until_idle();
+    timings_.record("lockstep_wait", wait.elapsed_ms());
+  }
   // ORB features once per frame, outside the CNN mask; the geometry check drops more of them.
   tracking::Frame current = tracker_->prepare_frame(frame, cnn_exclusion);
   if (dynamic_->enabled()) {
@@ -364,6 +377,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   if (result.motion_prior_used) ++stats_.frames_with_motion_prior;
   if (result.map_reset) {
     ++stats_.map_resets;
+    keyframes_before_map_ = stats_.keyframes_created;  // the new map is young again
     // The map was cleared: nothing downstream may keep using the old keyframes. Local mapping
     // and loop closing forget their lists and drop keyframes made for the old map (still queued
     // in threaded mode): every keyframe created from now on has an id above the one reserved here.

@@ -184,7 +184,8 @@ class System {
   map::KeyFramePtr last_reference_;
   // The dynamic memory's world-frame data follows loop corrections and global-BA merges.
   std::unique_ptr<MapCorrectionFollower> memory_anchor_;
-  int frames_since_keyframe_ = 1 << 20;  // deterministic mapping-busy emulation
+  int frames_since_keyframe_ = 1 << 20;   // deterministic mapping-busy emulation
+  std::size_t keyframes_before_map_ = 0;  // keyframes created before the map was last reset
   TimingStats timings_;
   SystemStatistics stats_;
 

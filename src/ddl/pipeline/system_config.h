@@ -56,6 +56,12 @@ struct SystemConfig {
   /// reports itself busy for this many frames after each keyframe (about its processing time at
   /// 30 Hz). 0 = always idle.
   int deterministic_mapping_busy_frames = 4;
+  /// Threaded mode: until tracking has created this many keyframes in the map (since it began
+  /// or was reset), it waits before each frame until local mapping has processed every keyframe
+  /// queued, as in deterministic mode. A young map is fragile, and its local BA is quick: on the
+  /// composite's first 130 frames, 4 of 50 runs went astray without the wait and none of 50 with
+  /// 30, at the same speed (docs/RESULTS.md, stop 32). 0 = never wait.
+  int threaded_lockstep_keyframes = 30;
   tracking::TrackerConfig tracking;  // includes ORB extraction (tracking.orb)
   mapping::LocalMapperConfig mapping;
   loop::LoopCloserConfig loop;
