@@ -58,10 +58,11 @@ struct SystemConfig {
   int deterministic_mapping_busy_frames = 4;
   /// Threaded mode: until tracking has created this many keyframes in the map (since it began
   /// or was reset), it waits before each frame until local mapping has processed every keyframe
-  /// queued, as in deterministic mode. A young map is fragile, and its local BA is quick: on the
-  /// composite's first 130 frames, 4 of 50 runs went astray without the wait and none of 50 with
-  /// 30, at the same speed (docs/RESULTS.md, stop 32). 0 = never wait.
-  int threaded_lockstep_keyframes = 30;
+  /// queued, as in deterministic mode. 30 removed the composite's occasional bad threaded starts
+  /// (first 130 frames: 4 of 50 runs above 0.05 m without, none of 50 with it), but over the whole
+  /// composite it cost 6% of the frame rate and its median ATE rose from 0.0219 to 0.0237 m (six
+  /// runs each; docs/RESULTS.md, stop 32), so it is off by default. 0 = never wait.
+  int threaded_lockstep_keyframes = 0;
   tracking::TrackerConfig tracking;  // includes ORB extraction (tracking.orb)
   mapping::LocalMapperConfig mapping;
   loop::LoopCloserConfig loop;
