@@ -23,6 +23,26 @@
 
 namespace ddl::pipeline {
 namespace fs = std::filesystem;
+namespace {
+
+/// A keyframe's colour, depth and exclusion images, every `pixel_step`-th pixel of the camera's.
+struct ScanImages {
+  cv::Mat bgr;
+  cv::Mat depth_m;
+  cv::Mat exclude;
+  int pixel_step = 1;
+};
+
+/// `images` with only the pixels the octree integrates when they hold every pixel and the
+/// octree's `stride` is above 1; as they are otherwise (they share the buffers).
+ScanImages at_octree_stride(ScanImages images, int stride) {
+  if (images.pixel_step != 1 || stride <= 1) return images;
+  const octomap::KeyframeScan c =
+      octomap::subsampled({0, SE3(), images.bgr, images.depth_m, images.exclude}, stride);
+  return {c.bgr, c.depth_m, c.exclude_mask, stride};
+}
+
+}  // namespace
 
 void DenseMapperConfig::validate() const {
   if (queue_capacity == 0) throw ConfigError::for_key("dense.queue_capacity", "must be >= 1");
@@ -83,19 +103,13 @@ void DenseMapper::preload(std::vector<map::DenseScan> scans) {
     s.keyframe = std::move(anchor);
     s.T_anchor_c = scan.T_anchor_c;
     s.loaded = true;
-    if (scan.pixel_step == 1 && config_.octree.pixel_stride > 1) {
-      const octomap::KeyframeScan c = octomap::subsampled(
-          {scan.anchor, SE3(), scan.bgr, scan.depth_m, scan.exclude}, config_.octree.pixel_stride);
-      s.bgr = c.bgr;
-      s.depth_m = c.depth_m;
-      s.exclude = c.exclude_mask;
-      s.pixel_step = config_.octree.pixel_stride;
-    } else {
-      s.bgr = std::move(scan.bgr);
-      s.depth_m = std::move(scan.depth_m);
-      s.exclude = std::move(scan.exclude);
-      s.pixel_step = scan.pixel_step;
-    }
+    ScanImages images = at_octree_stride(
+        {std::move(scan.bgr), std::move(scan.depth_m), std::move(scan.exclude), scan.pixel_step},
+        config_.octree.pixel_stride);
+    s.bgr = std::move(images.bgr);
+    s.depth_m = std::move(images.depth_m);
+    s.exclude = std::move(images.exclude);
+    s.pixel_step = images.pixel_step;
     entries.push_back(std::move(s));
   }
   if (!queue_) {
@@ -409,15 +423,12 @@ void DenseMapper::compact_old_keyframes() {
     Stored& s = stored_[i];
     if (s.pixel_step > 1 || (s.bgr.empty() && s.depth_m.empty())) continue;
     if (octree_) {
-      const int stride = config_.octree.pixel_stride;
-      if (stride > 1) {
-        const octomap::KeyframeScan c =
-            octomap::subsampled({s.keyframe->id(), SE3(), s.bgr, s.depth_m, s.exclude}, stride);
-        s.bgr = c.bgr;
-        s.depth_m = c.depth_m;
-        s.exclude = c.exclude_mask;
-        s.pixel_step = stride;
-      }
+      ScanImages images = at_octree_stride({s.bgr, s.depth_m, s.exclude, s.pixel_step},
+                                           config_.octree.pixel_stride);
+      s.bgr = std::move(images.bgr);
+      s.depth_m = std::move(images.depth_m);
+      s.exclude = std::move(images.exclude);
+      s.pixel_step = images.pixel_step;
     } else {
       s.bgr.release();
       s.depth_m.release();
@@ -491,19 +502,11 @@ std::vector<map::DenseScan> DenseMapper::dense_scans() const {
       scan.anchor = anchor->id();
       scan.T_anchor_c = tracking::resolved_T_w_c(anchor).inverse() *
                         camera_pose(s, tracking::resolved_T_w_c(s.keyframe));
-      if (s.pixel_step == 1 && stride > 1) {
-        const octomap::KeyframeScan c =
-            octomap::subsampled({s.keyframe->id(), SE3(), s.bgr, s.depth_m, s.exclude}, stride);
-        scan.bgr = c.bgr;
-        scan.depth_m = c.depth_m;
-        scan.exclude = c.exclude_mask;
-        scan.pixel_step = stride;
-      } else {
-        scan.bgr = s.bgr;
-        scan.depth_m = s.depth_m;
-        scan.exclude = s.exclude;
-        scan.pixel_step = s.pixel_step;
-      }
+      ScanImages images = at_octree_stride({s.bgr, s.depth_m, s.exclude, s.pixel_step}, stride);
+      scan.bgr = std::move(images.bgr);
+      scan.depth_m = std::move(images.depth_m);
+      scan.exclude = std::move(images.exclude);
+      scan.pixel_step = images.pixel_step;
       scans.push_back(std::move(scan));
     }
   });
