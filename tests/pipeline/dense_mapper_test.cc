@@ -164,6 +164,7 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
   struct Result {
     std::size_t scans_before_finish = 0;
     std::size_t rebuilds = 0;
+    std::size_t timed_rebuilds = 0;  // timing_ms's octomap_rebuild count
     std::size_t occupied = 0;
   };
   // Four keyframes of a wall 2 m away; `late` = {keyframe, shift} moves one of them after all
@@ -191,6 +192,9 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
     if (!shift_before_submit) keyframes[late.first]->set_T_c_w(pose(late.first, late.second));
     dense.finish();
     r.rebuilds = dense.stats().octree_rebuilds;
+    const auto timings = dense.timings().summary();
+    const auto rebuilt = timings.find("octomap_rebuild");
+    r.timed_rebuilds = rebuilt == timings.end() ? 0 : rebuilt->second.count;
     r.occupied = dense.octree()->stats().occupied_leaves;
     return r;
   };
@@ -205,7 +209,9 @@ TEST(DenseMapper, KeyframesGoIntoTheOctreeAfterTheirDelayAtTheirPoseThen) {
   EXPECT_NE(run(0, {3, 0.0}, true).occupied, truth.occupied);
   // Keyframe 0 moves 3 cm after it went in: the end of the run rebuilds; 5 mm (under a quarter of
   // the 5 cm voxel) does not.
-  EXPECT_EQ(run(2, {0, 0.03}, false).rebuilds, 1u);
+  const Result moved = run(2, {0, 0.03}, false);
+  EXPECT_EQ(moved.rebuilds, 1u);
+  EXPECT_EQ(moved.timed_rebuilds, 1u) << "the rebuild at the end of the run is not timed";
   EXPECT_EQ(run(2, {0, 0.005}, false).rebuilds, 0u);
   // At once (delay 0), as before: all four in before finish().
   EXPECT_EQ(run(0, {0, 0.0}, false).scans_before_finish, 4u);
