@@ -102,7 +102,6 @@ void DenseMapper::preload(std::vector<map::DenseScan> scans) {
     Stored s;
     s.keyframe = std::move(anchor);
     s.T_anchor_c = scan.T_anchor_c;
-    s.loaded = true;
     ScanImages images = at_octree_stride(
         {std::move(scan.bgr), std::move(scan.depth_m), std::move(scan.exclude), scan.pixel_step},
         config_.octree.pixel_stride);

@@ -145,10 +145,9 @@ class DenseMapper {
     SE3 T_w_c_integrated;     // the pose it went into the octree at (rebuild when it moved)
     bool integrated = false;  // in the octree (octree_delay_keyframes)
     int pixel_step = 1;       // > 1: compacted to the octree's pixels (no longer a source)
-    /// Loaded from a map file (preload): the scan's camera relative to `keyframe`, its anchor
-    /// (identity for the run's own keyframes). Loaded scans are never inpainting sources.
+    /// Loaded from a map file (preload; the first `loaded_` of stored_): the scan's camera
+    /// relative to `keyframe`, its anchor. Identity for the run's own keyframes.
     SE3 T_anchor_c;
-    bool loaded = false;
   };
   struct ResetRequest {
     std::optional<DensePoseSnapshot> snapshot;

@@ -26,12 +26,12 @@ void LocalMappingGate::close_insertion(bool queued_keyframe) {
 
 bool LocalMappingGate::mapping_idle() const {
   std::lock_guard lock(mutex_);
-  return !worker_exited_ && !in_progress_ && taken_ >= pushed_;
+  return !worker_exited_ && processed_all();
 }
 
 void LocalMappingGate::wait_until_idle() const {
   std::unique_lock lock(mutex_);
-  changed_.wait(lock, [&] { return worker_exited_ || (!in_progress_ && taken_ >= pushed_); });
+  changed_.wait(lock, [&] { return worker_exited_ || processed_all(); });
 }
 
 void LocalMappingGate::begin_keyframe() {
@@ -62,7 +62,7 @@ void LocalMappingGate::worker_exited() {
 }
 
 bool LocalMappingGate::drained() const {
-  return worker_exited_ || (!insertion_open_ && !in_progress_ && taken_ >= pushed_);
+  return worker_exited_ || (!insertion_open_ && processed_all());
 }
 
 void LocalMappingGate::pause() {

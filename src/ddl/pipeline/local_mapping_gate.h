@@ -68,6 +68,8 @@ class LocalMappingGate {
 
  private:
   bool drained() const;  // under mutex_
+  /// Every keyframe queued so far is processed and none is in progress (under mutex_).
+  bool processed_all() const { return !in_progress_ && taken_ >= pushed_; }
 
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;

@@ -338,8 +338,6 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
       try {
         eval::EvalResult result =
             eval::evaluate(*groundtruth, system.camera_trajectory(), {}, *gt, camera_path.string());
-        // The report and plots are outputs: failing to write them fails the run (output_errors),
-        // not the evaluation.
         // Tracked ratio against the frames that were processed (docs/evaluation.md): of the
         // processed frames inside the ground-truth span, those with an estimated pose. Until
         // 2026-11-26 it divided every estimated pose by those frames, so poses outside the span
@@ -348,6 +346,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
         result.tracked =
             eval::compute_tracked(processed_stamps, result.groundtruth, result.estimate);
         result.inputs.frames_path = "(the frames this run processed)";
+        // The report and plots are outputs: failing to write them fails the run (output_errors),
+        // not the evaluation.
         const fs::path eval_dir = out_dir / "eval";
         write_output([&] {
           create_folder(eval_dir, "the evaluation");
