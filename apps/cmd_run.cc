@@ -246,9 +246,11 @@ int run(const RunArgs& args) {
       }
       return out;
     };
-    std::printf("dynamic masks (IoU / precision / recall): cnn %s, geometry %s, combined %s\n",
-                scores(m["cnn"]).c_str(), scores(m["geometry"]).c_str(),
-                scores(m["combined"]).c_str());
+    std::printf(
+        "dynamic masks (IoU / precision / recall): cnn %s, geometry %s, free space %s, combined "
+        "%s\n",
+        scores(m["cnn"]).c_str(), scores(m["geometry"]).c_str(), scores(m["free_space"]).c_str(),
+        scores(m["combined"]).c_str());
   }
   std::printf("outputs in %s\n", args.output_dir.c_str());
   return outcome.interrupted ? kInterrupted : kOk;

@@ -29,6 +29,7 @@ HEADERS = [
     ("src/ddl/segmentation/segmenter.h", "segmentation", ["SegmenterConfig"]),
     ("src/ddl/dynamics/geometry_check.h", "dynamics", ["GeometryCheckConfig"]),
     ("src/ddl/dynamics/dynamic_memory.h", "dynamics", ["DynamicMemoryConfig"]),
+    ("src/ddl/dynamics/free_space_check.h", "dynamics", ["FreeSpaceConfig"]),
     ("src/ddl/dynamics/mask_depth_trim.h", "dynamics", ["DepthTrimConfig"]),
     ("src/ddl/dynamics/picture_veto.h", "dynamics", ["PictureVetoConfig"]),
     ("src/ddl/inpainting/background_inpainter.h", "inpainting", ["InpaintingConfig"]),

@@ -29,6 +29,7 @@ void DynamicConfig::validate() const {
   if (enabled && use_segmentation) segmentation.validate();
   if (enabled && use_geometry) geometry.validate();
   if (enabled && use_segmentation) memory.validate();
+  if (enabled && free_space.enabled) free_space.validate();
   if (enabled && use_segmentation && depth_trim.enabled) depth_trim.validate();
   if (enabled && use_segmentation && picture_veto.enabled) picture_veto.validate();
 }
@@ -155,6 +156,43 @@ cv::Mat DynamicFrontEnd::geometry_mask(const io::RgbdFrame& frame, const SE3& T_
                                          config_.geometry, stats, T_c_w_previous);
 }
 
+std::vector<dynamics::FreeSpaceView> DynamicFrontEnd::free_space_views(const io::RgbdFrame& frame,
+                                                                       const SE3& T_c_w) const {
+  std::vector<dynamics::FreeSpaceView> views;
+  if (!config_.enabled || !config_.free_space.enabled || frame.depth_m.empty()) return views;
+  std::vector<SE3> poses;
+  {
+    std::lock_guard lock(cache_mutex_);
+    // The cache is ordered by id, so oldest first, as the selection's spread needs.
+    for (const auto& [id, images] : depth_cache_) {
+      const map::KeyFramePtr kf = images.keyframe.lock();
+      if (!kf || kf->is_bad() || images.free_space.packed_mm.empty()) continue;
+      if (frame.timestamp_s - kf->timestamp_s() < config_.free_space.min_reference_age_s) continue;
+      views.push_back(images.free_space);
+      poses.push_back(kf->T_w_c());
+    }
+  }
+  const std::vector<std::size_t> chosen =
+      dynamics::select_free_space_views(frame.depth_m, T_c_w, poses, camera_, config_.free_space);
+  std::vector<dynamics::FreeSpaceView> out;
+  out.reserve(chosen.size());
+  for (const std::size_t k : chosen) {
+    out.push_back(std::move(views[k]));
+    out.back().T_w_c = poses[k];
+  }
+  return out;
+}
+
+cv::Mat DynamicFrontEnd::free_space_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                                         const std::vector<dynamics::FreeSpaceView>& views,
+                                         dynamics::FreeSpaceVotes* votes,
+                                         dynamics::FreeSpaceStats* stats) const {
+  if (!config_.enabled || !config_.free_space.enabled || views.empty()) return {};
+  *votes = dynamics::free_space_votes(frame.depth_m, T_c_w, views, camera_, config_.free_space);
+  if (stats != nullptr) stats->views = static_cast<int>(views.size());
+  return dynamics::free_space_mask(frame.depth_m, *votes, config_.free_space, stats);
+}
+
 cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {
   return dynamics::feature_exclusion_mask(mask, config_.feature_border_px);
 }
@@ -177,8 +215,20 @@ void DynamicFrontEnd::remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T
 
 void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
                                    const cv::Mat& moved_exclusion) const {
-  masks.combined =
-      dynamics::combine_masks(dynamics::combine_masks(masks.cnn, masks.geometry), masks.memory);
+  // The sources' regions that the free-space votes saw as static surface are left out of the
+  // combined mask; tracking has already dropped their features (the CNN's before the low-cost
+  // pose that the votes need).
+  const auto judged = [&](const cv::Mat& mask, bool judge) {
+    return judge && !masks.free_space_votes.free_votes.empty()
+               ? dynamics::drop_static_regions(mask, masks.free_space_votes, config_.free_space,
+                                               &masks.free_space_stats)
+               : mask;
+  };
+  const dynamics::FreeSpaceConfig& f = config_.free_space;
+  masks.free_space_stats.regions_dropped = 0;  // of this call (a relocalized frame calls twice)
+  masks.combined = dynamics::combine_masks(
+      dynamics::combine_masks(judged(masks.cnn, true), judged(masks.geometry, f.judge_geometry)),
+      dynamics::combine_masks(judged(masks.memory, true), masks.free_space));
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }
 
@@ -192,11 +242,17 @@ std::optional<map::KeyFrameImages> DynamicFrontEnd::keyframe_images(map::KeyFram
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
                                         const cv::Mat& dynamic_mask) {
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
-  if (!config_.enabled || !config_.use_geometry) return;
+  if (!config_.keeps_keyframe_images()) return;
   // A mask that marked nothing is kept as none: the check reads an empty mask as unmasked.
   const bool any_dynamic = !dynamic_mask.empty() && cv::countNonZero(dynamic_mask) > 0;
+  const cv::Mat kept_mask = any_dynamic ? dynamic_mask : cv::Mat();
+  KeyframeImages images{keyframe, depth_m, kept_mask, {}};
+  if (config_.free_space.enabled) {
+    images.free_space =
+        dynamics::prepare_free_space_view(SE3(), depth_m, kept_mask, config_.free_space);
+  }
   std::lock_guard lock(cache_mutex_);
-  depth_cache_[keyframe->id()] = {keyframe, depth_m, any_dynamic ? dynamic_mask : cv::Mat()};
+  depth_cache_[keyframe->id()] = std::move(images);
   if (depth_cache_.size() <= config_.keyframe_depth_cache) return;
   // Culled keyframes leave first, then the oldest. Until stop 26 the oldest left first whatever
   // else was there, with a limit of 30: a camera back in a place mapped more than 30 keyframes

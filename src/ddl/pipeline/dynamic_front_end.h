@@ -18,6 +18,7 @@
 #include "ddl/camera/pinhole_camera.h"
 #include "ddl/core/se3.h"
 #include "ddl/dynamics/dynamic_memory.h"
+#include "ddl/dynamics/free_space_check.h"
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/io/rgbd_frame.h"
 #include "ddl/map/keyframe.h"
@@ -38,14 +39,20 @@ struct CnnMask {
 };
 
 struct DynamicMasks {
-  cv::Mat cnn;        // CV_8UC1 255 = dynamic class (empty when segmentation is off)
-  cv::Mat geometry;   // CV_8UC1 255 = moved according to the geometry check (may be empty)
-  cv::Mat memory;     // CV_8UC1 255 = where a recent CNN detection still is (may be empty)
-  cv::Mat combined;   // union of the three (empty when all are)
+  cv::Mat cnn;         // CV_8UC1 255 = dynamic class (empty when segmentation is off)
+  cv::Mat geometry;    // CV_8UC1 255 = moved according to the geometry check (may be empty)
+  cv::Mat memory;      // CV_8UC1 255 = where a recent CNN detection still is (may be empty)
+  cv::Mat free_space;  // CV_8UC1 255 = in space earlier keyframes saw empty (may be empty)
+  /// The union of the four, the regions of the CNN and memory masks (and, with
+  /// free_space.judge_geometry, of the geometry mask) that the free-space votes saw as static
+  /// left out (empty when all are)
+  cv::Mat combined;
   cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
                       // (CNN part before ORB extraction, geometry part after the low-cost pose)
   dynamics::GeometryCheckStats geometry_stats;
   dynamics::DynamicMemoryStats memory_stats;
+  dynamics::FreeSpaceVotes free_space_votes;  // empty grids when the check did not run
+  dynamics::FreeSpaceStats free_space_stats;
   double segmentation_ms = 0.0;
   double geometry_ms = 0.0;
 };
@@ -94,6 +101,19 @@ class DynamicFrontEnd {
                         dynamics::GeometryCheckStats* stats,
                         const std::optional<SE3>& T_c_w_previous = std::nullopt) const;
 
+  /// The keyframes that vote in the free-space check of the frame at pose T_c_w: the cached ones
+  /// at least free_space.min_reference_age_s older than it and not culled, with their current
+  /// poses (dynamics::select_free_space_views). Call it where the poses are consistent with each
+  /// other and with the frame's (System reads them under Map::read_consistent).
+  std::vector<dynamics::FreeSpaceView> free_space_views(const io::RgbdFrame& frame,
+                                                        const SE3& T_c_w) const;
+
+  /// The free-space mask of the frame at pose T_c_w against `views`; the votes go to `votes`
+  /// (for finish_masks). Empty when the check is off or has no view.
+  cv::Mat free_space_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
+                          const std::vector<dynamics::FreeSpaceView>& views,
+                          dynamics::FreeSpaceVotes* votes, dynamics::FreeSpaceStats* stats) const;
+
   /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
   cv::Mat exclusion_mask(const cv::Mat& mask) const;
 
@@ -115,7 +135,8 @@ class DynamicFrontEnd {
   /// Forgets the remembered detections (map reset).
   void forget_dynamic_surfaces() { memory_.clear(); }
 
-  /// The union of the CNN, geometry and memory masks, and the exclusion mask as the union of the
+  /// The combined mask (DynamicMasks::combined: the union of the four sources, the regions the
+  /// free-space votes saw as static left out), and the exclusion mask as the union of the
   /// CNN exclusion and `moved_exclusion` (the geometry and memory masks grown by the border;
   /// dilation distributes over union, so this is the union grown by the border).
   void finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
@@ -143,7 +164,8 @@ class DynamicFrontEnd {
   struct KeyframeImages {
     std::weak_ptr<map::KeyFrame> keyframe;  // culled or gone: the first to leave the cache
     cv::Mat depth_m;
-    cv::Mat dynamic_mask;  // empty when the mask marked nothing
+    cv::Mat dynamic_mask;                // empty when the mask marked nothing
+    dynamics::FreeSpaceView free_space;  // its images prepared once (pose set when it votes)
   };
   std::map<map::KeyFrameId, KeyframeImages> depth_cache_;  // for the geometry check
   dynamics::DynamicMemory memory_;                         // tracking thread only

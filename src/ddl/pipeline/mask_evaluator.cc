@@ -211,6 +211,7 @@ void MaskEvaluator::add(const io::RgbdFrame& frame, const DynamicMasks& masks) {
   }
   cnn_.add(eval::count_mask_pixels(masks.cnn, truth, scored));
   geometry_.add(eval::count_mask_pixels(masks.geometry, truth, scored));
+  free_space_.add(eval::count_mask_pixels(masks.free_space, truth, scored));
   combined_.add(eval::count_mask_pixels(masks.combined, truth, scored));
   if (!moved_object_) return;
   cv::Mat region = moved_object_->region(frame.timestamp_s);
@@ -220,12 +221,14 @@ void MaskEvaluator::add(const io::RgbdFrame& frame, const DynamicMasks& masks) {
   ++object_frames_;
   object_cnn_ += eval::count_mask_pixels(masks.cnn, truth, region);
   object_geometry_ += eval::count_mask_pixels(masks.geometry, truth, region);
+  object_free_space_ += eval::count_mask_pixels(masks.free_space, truth, region);
   object_combined_ += eval::count_mask_pixels(masks.combined, truth, region);
 }
 
 eval::MaskSummary MaskEvaluator::summary(const std::string& source) const {
   if (source == "cnn") return cnn_.summary();
   if (source == "geometry") return geometry_.summary();
+  if (source == "free_space") return free_space_.summary();
   if (source == "combined") return combined_.summary();
   throw std::invalid_argument("MaskEvaluator::summary: unknown source " + source);
 }
@@ -240,6 +243,7 @@ nlohmann::json MaskEvaluator::to_json() const {
                                     {"px", void_pixels_}}},
       {"cnn", eval::to_json(cnn_.summary())},
       {"geometry", eval::to_json(geometry_.summary())},
+      {"free_space", eval::to_json(free_space_.summary())},
       {"combined", eval::to_json(combined_.summary())}};
   if (moved_object_) {
     auto recall = [](const eval::MaskCounts& c) {
@@ -252,6 +256,7 @@ nlohmann::json MaskEvaluator::to_json() const {
                          {"recall",
                           {{"cnn", recall(object_cnn_)},
                            {"geometry", recall(object_geometry_)},
+                           {"free_space", recall(object_free_space_)},
                            {"combined", recall(object_combined_)}}},
                          {"region", fmt::format("convex hull of the box's projected corners "
                                                 "(meta.json, groundtruth.txt) grown by {} px, "

@@ -77,7 +77,7 @@ class MaskEvaluator {
   /// counted in frames_without_truth. Throws ddl::InputError naming an unreadable mask file.
   void add(const io::RgbdFrame& frame, const DynamicMasks& masks);
 
-  /// {truth, frames_without_truth, void, cnn, geometry, combined[, moved_object]}, see
+  /// {truth, frames_without_truth, void, cnn, geometry, free_space, combined[, moved_object]}, see
   /// docs/evaluation.md.
   nlohmann::json to_json() const;
 
@@ -95,8 +95,8 @@ class MaskEvaluator {
   camera::Undistorter undistorter_;
   std::optional<MovedObjectRegion> moved_object_;
   std::size_t frames_without_truth_ = 0;
-  eval::MaskAccumulator cnn_, geometry_, combined_;
-  eval::MaskCounts object_cnn_, object_geometry_, object_combined_;
+  eval::MaskAccumulator cnn_, geometry_, free_space_, combined_;
+  eval::MaskCounts object_cnn_, object_geometry_, object_free_space_, object_combined_;
   std::size_t object_frames_ = 0;
 };
 

@@ -98,6 +98,8 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"geometry_checks_implausible", s.geometry_checks_implausible},
           {"geometry_checks_skipped", s.geometry_checks_skipped},
           {"geometry_checks_without_reference", s.geometry_checks_without_reference},
+          {"free_space_checks_skipped", s.free_space_checks_skipped},
+          {"free_space_regions_dropped", s.free_space_regions_dropped},
           {"segmentations_turned", s.segmentations_turned},
           {"cnn_pictures_dropped", s.cnn_pictures_dropped},
           {"cnn_pictures_unjudged", s.cnn_pictures_unjudged},

@@ -75,7 +75,7 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
   dense_config.threaded = config_.mode == RunMode::kThreaded;
   dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
   if (config_.save_masks && !config_.output_dir.empty()) {
-    for (const char* part : {"cnn", "geometry", "memory"}) {
+    for (const char* part : {"cnn", "geometry", "memory", "free_space"}) {
       create_folder(std::filesystem::path(config_.output_dir) / "masks" / part, "the masks");
     }
   }
@@ -121,7 +121,10 @@ CnnMask System::segment(const io::RgbdFrame& frame) {
 cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
                                        DynamicMasks& masks) {
   const bool use_memory = dynamic_->memory_enabled();
-  if ((!config_.dynamic.use_geometry && !use_memory) || !last_reference_) return {};
+  const bool use_free_space = config_.dynamic.free_space.enabled;
+  if ((!config_.dynamic.use_geometry && !use_memory && !use_free_space) || !last_reference_) {
+    return {};
+  }
   if (last_reference_->is_bad()) {
     // Culled since the last frame (threaded mode): nothing to check against this frame.
     if (config_.dynamic.use_geometry) ++stats_.geometry_checks_without_reference;
@@ -177,6 +180,22 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     masks.geometry_ms = geometry_watch.elapsed_ms();
     timings_.record("geometry_check", masks.geometry_ms);
   }
+  if (use_free_space) {
+    // The frame's points against many earlier keyframes: in space they saw empty, something moved.
+    const Stopwatch free_space_watch;
+    std::vector<dynamics::FreeSpaceView> views;
+    map_->read_consistent([&] { views = dynamic_->free_space_views(frame, *T_c_w); });
+    if (!LocalMappingGate::unchanged(stops_before, mapping_gate_.stop_sequence())) {
+      ++stats_.free_space_checks_skipped;
+      views.clear();  // the poses may be in two world frames: no free-space mask for this frame
+    }
+    masks.free_space = dynamic_->free_space_mask(frame, *T_c_w, views, &masks.free_space_votes,
+                                                 &masks.free_space_stats);
+    const dynamics::FreeSpaceStats& f = masks.free_space_stats;
+    spdlog::debug("frame {}: free-space check: {} views, {} samples, {} dynamic, {} regions",
+                  frame.index, f.views, f.samples, f.samples_dynamic, f.regions);
+    timings_.record("free_space_check", free_space_watch.elapsed_ms());
+  }
   if (use_memory) {
     // Where people the CNN found in the last frames still are (it misses those cut by the border).
     const Stopwatch memory_watch;
@@ -192,9 +211,12 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     }
     timings_.record("dynamic_memory", memory_watch.elapsed_ms());
   }
-  cv::Mat exclusion = dynamic_->exclusion_mask(
-      config_.dynamic.memory.drop_features ? dynamics::combine_masks(masks.geometry, masks.memory)
-                                           : masks.geometry);
+  cv::Mat moved = masks.geometry;
+  if (config_.dynamic.memory.drop_features) moved = dynamics::combine_masks(moved, masks.memory);
+  if (config_.dynamic.free_space.drop_features) {
+    moved = dynamics::combine_masks(moved, masks.free_space);
+  }
+  cv::Mat exclusion = dynamic_->exclusion_mask(moved);
   const Stopwatch drop_watch;
   tracker_->exclude_features(current, exclusion);
   timings_.record("geometry_feature_removal", drop_watch.elapsed_ms());
@@ -343,11 +365,15 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
       // frame's keyframe and the dense map get the CNN mask only (review, stop 29).
       masks.geometry.release();
       masks.memory.release();
+      masks.free_space.release();
+      masks.free_space_votes = {};
       dynamic_->finish_masks(masks, cnn_exclusion, cv::Mat());
     }
   }
 
   ++stats_.frames;
+  stats_.free_space_regions_dropped +=
+      static_cast<std::size_t>(masks.free_space_stats.regions_dropped);
   if (result.tracked()) {
     ++stats_.frames_tracked;
     const SE3 T_c_w = result.T_w_c->inverse();
@@ -395,9 +421,11 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     const std::string name = fmt::format("{:.6f}.png", frame.timestamp_s);
     saved_masks_.write_png(dir / name, outcome.masks.combined);
     // The parts, where they marked anything (an empty part is written as no file).
-    const std::pair<const char*, const cv::Mat*> parts[] = {{"cnn", &outcome.masks.cnn},
-                                                            {"geometry", &outcome.masks.geometry},
-                                                            {"memory", &outcome.masks.memory}};
+    const std::pair<const char*, const cv::Mat*> parts[] = {
+        {"cnn", &outcome.masks.cnn},
+        {"geometry", &outcome.masks.geometry},
+        {"memory", &outcome.masks.memory},
+        {"free_space", &outcome.masks.free_space}};
     for (const auto& [part, mask] : parts) {
       if (!mask->empty() && cv::countNonZero(*mask) > 0) {
         saved_masks_.write_png(dir / part / name, *mask);

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "ddl/dynamics/dynamic_memory.h"
+#include "ddl/dynamics/free_space_check.h"
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/dynamics/mask_depth_trim.h"
 #include "ddl/dynamics/picture_veto.h"
@@ -36,14 +37,20 @@ struct DynamicConfig {
   /// ATE on syn_walking_xyz.
   int segmentation_interval = 2;
   int segmentation_reuse_dilation_px = 8;  // growth of a reused CNN mask (people move meanwhile)
-  /// Keyframe depth images (and dynamic masks) kept for the geometry check's references, culled
-  /// keyframes dropped first, then the oldest: about 1.2 MB each at 640x480 (1.5 MB with a mask).
+  /// Keyframe depth images (and dynamic masks) kept for the geometry check's references and the
+  /// free-space check's views, culled keyframes dropped first, then the oldest: about 1.2 MB each
+  /// at 640x480 (1.5 MB with a mask; 2.7 MB with the free-space check's window minimum).
   std::size_t keyframe_depth_cache = 200;
   segmentation::SegmenterConfig segmentation;
   dynamics::DepthTrimConfig depth_trim;      // CNN masks cut to their region's depth (spill)
   dynamics::PictureVetoConfig picture_veto;  // CNN regions standing in front of nothing dropped
   dynamics::GeometryCheckConfig geometry;
   dynamics::DynamicMemoryConfig memory;  // CNN detections of recent frames, re-projected
+  dynamics::FreeSpaceConfig free_space;  // the frame's points against many earlier keyframes
+
+  /// Whether keyframe depth images are kept (dynamic.keyframe_depth_cache): the references of the
+  /// geometry check and the views of the free-space check.
+  bool keeps_keyframe_images() const { return enabled && (use_geometry || free_space.enabled); }
 
   void validate() const;
 };

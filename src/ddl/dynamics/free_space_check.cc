@@ -1,0 +1,305 @@
+#include "ddl/dynamics/free_space_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "ddl/core/error.h"
+
+namespace ddl::dynamics {
+namespace {
+
+constexpr int kOverlapGridPx = 40;  // spacing of the coarse grid that measures a view's overlap
+
+/// The sample lattice of an image: sample (i, j) sits at pixel (j * s + s / 2, i * s + s / 2).
+struct Lattice {
+  int stride, rows, cols;
+  Lattice(const cv::Mat& image, int s)
+      : stride(s), rows((image.rows - s / 2 + s - 1) / s), cols((image.cols - s / 2 + s - 1) / s) {}
+  int u(int j) const { return j * stride + stride / 2; }
+  int v(int i) const { return i * stride + stride / 2; }
+};
+
+bool in_range(float z, const FreeSpaceConfig& config) {
+  return z >= config.min_depth_m && z <= config.max_depth_m;
+}
+
+}  // namespace
+
+void FreeSpaceConfig::validate() const {
+  auto fail = [](const char* key, const std::string& what) {
+    throw ConfigError::for_key(std::string("dynamic.free_space.") + key, what);
+  };
+  if (max_reference_keyframes < 1 || max_reference_keyframes > 255)
+    fail("max_reference_keyframes", "must be in 1..255");
+  if (!(min_reference_age_s >= 0)) fail("min_reference_age_s", "must be >= 0");
+  if (!(min_overlap >= 0 && min_overlap <= 1)) fail("min_overlap", "must be in [0, 1]");
+  if (sample_stride_px < 1 || sample_stride_px > 32) fail("sample_stride_px", "must be in 1..32");
+  if (!(depth_threshold_m > 0)) fail("depth_threshold_m", "must be > 0");
+  if (!(depth_threshold_quadratic >= 0)) fail("depth_threshold_quadratic", "must be >= 0");
+  if (!(min_depth_m > 0)) fail("min_depth_m", "must be > 0");
+  if (!(max_depth_m > min_depth_m)) fail("max_depth_m", "must exceed min_depth_m");
+  if (window_radius_px < 0 || window_radius_px > 10) fail("window_radius_px", "must be in 0..10");
+  if (reference_mask_margin_px < 0 || reference_mask_margin_px > 50)
+    fail("reference_mask_margin_px", "must be in 0..50");
+  if (min_free_votes < 1 || min_free_votes > max_reference_keyframes)
+    fail("min_free_votes", "must be in 1..max_reference_keyframes");
+  if (!(max_static_per_free >= 0)) fail("max_static_per_free", "must be >= 0");
+  if (min_region_px < 0) fail("min_region_px", "must be >= 0");
+  if (!(max_static_region_share >= 0 && max_static_region_share <= 1))
+    fail("max_static_region_share", "must be in [0, 1]");
+}
+
+FreeSpaceView prepare_free_space_view(const SE3& T_w_c, const cv::Mat& depth_m,
+                                      const cv::Mat& dynamic_mask, const FreeSpaceConfig& config) {
+  FreeSpaceView view;
+  view.T_w_c = T_w_c;
+  // The window minimum over valid depths: holes (0) must not count as near, so they become +inf
+  // for the erosion and 0 again after it.
+  cv::Mat nearest = depth_m.clone();
+  nearest.setTo(std::numeric_limits<float>::infinity(), depth_m <= 0.0f);
+  const int r = config.window_radius_px;
+  if (r > 0) {
+    cv::erode(nearest, nearest, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
+  }
+  nearest.setTo(0.0f, nearest == std::numeric_limits<float>::infinity());
+  cv::Mat seen;
+  depth_m.convertTo(seen, CV_16U, 500.0);  // half millimetres: doubled below, the low bit freed
+  seen *= 2;
+  if (!dynamic_mask.empty()) {
+    cv::Mat masked = dynamic_mask != 0;
+    const int m = config.reference_mask_margin_px;
+    if (m > 0) {
+      cv::dilate(masked, masked, cv::getStructuringElement(cv::MORPH_RECT, {2 * m + 1, 2 * m + 1}));
+    }
+    cv::add(seen, cv::Scalar(1), seen, masked & (seen > 0));
+  }
+  cv::Mat channels[2];
+  nearest.convertTo(channels[0], CV_16U, 1000.0);  // saturates at 65.5 m, beyond max_depth_m
+  channels[1] = seen;
+  cv::merge(channels, 2, view.packed_mm);
+  return view;
+}
+
+std::vector<std::size_t> select_free_space_views(const cv::Mat& depth_m, const SE3& T_c_w,
+                                                 const std::vector<SE3>& views_T_w_c,
+                                                 const camera::PinholeCamera& camera,
+                                                 const FreeSpaceConfig& config) {
+  const SE3 T_w_c = T_c_w.inverse();
+  std::vector<Vec3d> grid_w;
+  for (int v = kOverlapGridPx / 2; v < depth_m.rows; v += kOverlapGridPx) {
+    for (int u = kOverlapGridPx / 2; u < depth_m.cols; u += kOverlapGridPx) {
+      const float z = depth_m.at<float>(v, u);
+      if (in_range(z, config)) grid_w.push_back(T_w_c * camera.unproject(u, v, z));
+    }
+  }
+  std::vector<std::size_t> seeing;
+  if (grid_w.empty()) return seeing;
+  for (std::size_t k = 0; k < views_T_w_c.size(); ++k) {
+    const SE3 T_r_w = views_T_w_c[k].inverse();
+    std::size_t inside = 0;
+    for (const Vec3d& p_w : grid_w) {
+      const Vec3d p_r = T_r_w * p_w;
+      if (p_r.z() >= config.min_depth_m && camera.in_image(camera.project(p_r))) ++inside;
+    }
+    if (static_cast<double>(inside) >= config.min_overlap * static_cast<double>(grid_w.size())) {
+      seeing.push_back(k);
+    }
+  }
+  const std::size_t n = static_cast<std::size_t>(config.max_reference_keyframes);
+  if (seeing.size() <= n) return seeing;
+  // Evenly spread from the first to the last, both included.
+  std::vector<std::size_t> spread;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t at = n == 1 ? seeing.size() - 1 : i * (seeing.size() - 1) / (n - 1);
+    spread.push_back(seeing[at]);
+  }
+  return spread;
+}
+
+FreeSpaceVotes free_space_votes(const cv::Mat& depth_m, const SE3& T_c_w,
+                                const std::vector<FreeSpaceView>& views,
+                                const camera::PinholeCamera& camera,
+                                const FreeSpaceConfig& config) {
+  const Lattice lattice(depth_m, config.sample_stride_px);
+  FreeSpaceVotes votes;
+  votes.stride = config.sample_stride_px;
+  votes.free_votes = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  votes.static_votes = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  votes.masked_votes = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  votes.has_depth = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  std::vector<cv::Point> samples;
+  std::vector<Eigen::Vector3f> points_c;
+  for (int i = 0; i < lattice.rows; ++i) {
+    for (int j = 0; j < lattice.cols; ++j) {
+      const float z = depth_m.at<float>(lattice.v(i), lattice.u(j));
+      if (!in_range(z, config)) continue;
+      votes.has_depth.at<std::uint8_t>(i, j) = 1;
+      samples.emplace_back(j, i);
+      points_c.push_back(camera.unproject(lattice.u(j), lattice.v(i), z).cast<float>());
+    }
+  }
+  const SE3 T_w_c = T_c_w.inverse();
+  const auto fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const auto cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
+  const auto min_z = static_cast<float>(config.min_depth_m);
+  const auto tau0 = static_cast<float>(config.depth_threshold_m);
+  const auto tau2 = static_cast<float>(config.depth_threshold_quadratic);
+  std::uint8_t* free_votes = votes.free_votes.ptr<std::uint8_t>();
+  std::uint8_t* static_votes = votes.static_votes.ptr<std::uint8_t>();
+  std::uint8_t* masked_votes = votes.masked_votes.ptr<std::uint8_t>();
+  const int grid_cols = lattice.cols;
+  for (const FreeSpaceView& view : views) {
+    const SE3 T_r_c = view.T_w_c.inverse() * T_w_c;
+    const Eigen::Matrix3f R = T_r_c.rotation().cast<float>();
+    const Eigen::Vector3f t = T_r_c.translation().cast<float>();
+    const int w = view.packed_mm.cols, h = view.packed_mm.rows;
+    const auto* packed = view.packed_mm.ptr<std::uint16_t>();  // continuous: made by cv::merge
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      const Eigen::Vector3f p_r = R * points_c[k] + t;
+      const float z = p_r.z();
+      if (z < min_z) continue;
+      // +0.5 in cx, cy and truncation round the non-negative coordinates that matter.
+      const float uf = fx * p_r.x() / z + cx, vf = fy * p_r.y() / z + cy;
+      if (!(uf >= 0.0f && vf >= 0.0f && uf < static_cast<float>(w) && vf < static_cast<float>(h))) {
+        continue;
+      }
+      const std::uint16_t* seen = packed + 2 * (static_cast<int>(vf) * w + static_cast<int>(uf));
+      const float z_mm = 1000.0f * z;
+      const float tau_mm = 1000.0f * (tau0 + tau2 * z * z);
+      const int cell = samples[k].y * grid_cols + samples[k].x;
+      if (static_cast<float>(seen[0]) > z_mm + tau_mm) {  // no valid depth is 0, never beyond z
+        if (free_votes[cell] < 255) ++free_votes[cell];
+      } else if (seen[1] >= 2 && std::abs(static_cast<float>(seen[1] & ~1u) - z_mm) < tau_mm) {
+        std::uint8_t* vote = (seen[1] & 1u) != 0 ? &masked_votes[cell] : &static_votes[cell];
+        if (*vote < 255) ++*vote;
+      }
+    }
+  }
+  return votes;
+}
+
+cv::Mat free_space_mask(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
+                        const FreeSpaceConfig& config, FreeSpaceStats* stats) {
+  const Lattice lattice(depth_m, votes.stride);
+  cv::Mat dynamic = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  int samples = 0, samples_dynamic = 0;
+  for (int i = 0; i < lattice.rows; ++i) {
+    for (int j = 0; j < lattice.cols; ++j) {
+      if (votes.has_depth.at<std::uint8_t>(i, j) == 0) continue;
+      ++samples;
+      const int free = votes.free_votes.at<std::uint8_t>(i, j);
+      const int fixed = votes.static_votes.at<std::uint8_t>(i, j);
+      if (free >= config.min_free_votes && fixed <= config.max_static_per_free * free) {
+        dynamic.at<std::uint8_t>(i, j) = 255;
+        ++samples_dynamic;
+      }
+    }
+  }
+  if (stats != nullptr) {
+    stats->samples = samples;
+    stats->samples_dynamic = samples_dynamic;
+  }
+  if (samples_dynamic == 0) return {};
+  // Lone samples and one-sample-wide lines are the noise of depth edges; then small regions go.
+  cv::morphologyEx(dynamic, dynamic, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+  cv::Mat labels, region_stats, centroids;
+  const int n = cv::connectedComponentsWithStats(dynamic, labels, region_stats, centroids, 8);
+  const int min_samples =
+      (config.min_region_px + votes.stride * votes.stride - 1) / (votes.stride * votes.stride);
+  std::vector<bool> keep(static_cast<std::size_t>(n), false);
+  int regions = 0;
+  for (int r = 1; r < n; ++r) {
+    keep[static_cast<std::size_t>(r)] = region_stats.at<int>(r, cv::CC_STAT_AREA) >= min_samples;
+    if (keep[static_cast<std::size_t>(r)]) ++regions;
+  }
+  if (stats != nullptr) stats->regions = regions;
+  if (regions == 0) return {};
+  cv::Mat kept = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  for (int i = 0; i < lattice.rows; ++i) {
+    for (int j = 0; j < lattice.cols; ++j) {
+      if (keep[static_cast<std::size_t>(labels.at<int>(i, j))]) kept.at<std::uint8_t>(i, j) = 1;
+    }
+  }
+  const auto is_kept = [&](int i, int j) {
+    return i >= 0 && j >= 0 && i < lattice.rows && j < lattice.cols &&
+           kept.at<std::uint8_t>(i, j) != 0;
+  };
+  // Each pixel looks at the (up to) four samples around it: it joins when one of them is kept and
+  // its own depth is within tau of that sample's; a pixel without depth takes its nearest sample.
+  // Only the pixels near kept samples can join.
+  const int s = votes.stride;
+  const cv::Rect box = cv::boundingRect(kept);
+  const int v_begin = std::max(0, box.y * s - s),
+            v_end = std::min(depth_m.rows, (box.y + box.height + 1) * s);
+  const int u_begin = std::max(0, box.x * s - s),
+            u_end = std::min(depth_m.cols, (box.x + box.width + 1) * s);
+  cv::Mat mask = cv::Mat::zeros(depth_m.size(), CV_8UC1);
+  for (int v = v_begin; v < v_end; ++v) {
+    const int i0 = (v - s / 2) >= 0 ? (v - s / 2) / s : -1;
+    const int i_near = std::min(lattice.rows - 1, v / s);
+    const float* z_row = depth_m.ptr<float>(v);
+    std::uint8_t* out = mask.ptr<std::uint8_t>(v);
+    for (int u = u_begin; u < u_end; ++u) {
+      const int j0 = (u - s / 2) >= 0 ? (u - s / 2) / s : -1;
+      const float z = z_row[u];
+      if (z <= 0.0f) {
+        if (is_kept(i_near, std::min(lattice.cols - 1, u / s))) out[u] = 255;
+        continue;
+      }
+      for (int di = 0; di < 2 && out[u] == 0; ++di) {
+        for (int dj = 0; dj < 2; ++dj) {
+          const int i = i0 + di, j = j0 + dj;
+          if (!is_kept(i, j)) continue;
+          const float zs = depth_m.at<float>(lattice.v(i), lattice.u(j));
+          if (std::abs(z - zs) < config.threshold_at(zs)) {
+            out[u] = 255;
+            break;
+          }
+        }
+      }
+    }
+  }
+  return mask;
+}
+
+cv::Mat drop_static_regions(const cv::Mat& mask, const FreeSpaceVotes& votes,
+                            const FreeSpaceConfig& config, FreeSpaceStats* stats) {
+  if (mask.empty() || config.max_static_region_share >= 1.0) return mask;
+  cv::Mat binary = mask != 0;
+  cv::Mat labels;
+  const int n = cv::connectedComponents(binary, labels, 8, CV_32S);
+  if (n <= 1) return mask;
+  std::vector<int> with_depth(static_cast<std::size_t>(n), 0), seen_static(with_depth);
+  const Lattice lattice(mask, votes.stride);
+  for (int i = 0; i < lattice.rows; ++i) {
+    for (int j = 0; j < lattice.cols; ++j) {
+      const int r = labels.at<int>(lattice.v(i), lattice.u(j));
+      if (r == 0 || votes.has_depth.at<std::uint8_t>(i, j) == 0) continue;
+      ++with_depth[static_cast<std::size_t>(r)];
+      if (votes.seen_static(i, j)) ++seen_static[static_cast<std::size_t>(r)];
+    }
+  }
+  std::vector<bool> drop(static_cast<std::size_t>(n), false);
+  int dropped = 0;
+  for (std::size_t r = 1; r < drop.size(); ++r) {
+    drop[r] = seen_static[r] > config.max_static_region_share * with_depth[r];
+    if (drop[r]) ++dropped;
+  }
+  if (stats != nullptr) stats->regions_dropped += dropped;
+  if (dropped == 0) return mask;
+  cv::Mat out = mask.clone();
+  for (int v = 0; v < out.rows; ++v) {
+    const int* l = labels.ptr<int>(v);
+    std::uint8_t* o = out.ptr<std::uint8_t>(v);
+    for (int u = 0; u < out.cols; ++u) {
+      if (drop[static_cast<std::size_t>(l[u])]) o[u] = 0;
+    }
+  }
+  return out;
+}
+
+}  // namespace ddl::dynamics
