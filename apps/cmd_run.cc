@@ -19,6 +19,7 @@
 #include "ddl/config/system_config.h"
 #include "ddl/core/error.h"
 #include "ddl/core/filesystem.h"
+#include "ddl/dynamics/mask_fusion.h"
 #include "ddl/io/dataset_factory.h"
 #include "ddl/pipeline/mask_evaluator.h"
 #include "ddl/pipeline/sequence_runner.h"
@@ -38,7 +39,8 @@ viewer::ViewFrame to_view_frame(const io::RgbdFrame& frame, const pipeline::Fram
   view.index = frame.index;
   view.rgb = frame.rgb;
   view.cnn = outcome.masks.cnn;
-  view.geometry = outcome.masks.geometry;
+  // Both multi-view checks in one tint: the free-space check replaces the sparse one by default.
+  view.geometry = dynamics::combine_masks(outcome.masks.geometry, outcome.masks.free_space);
   view.memory = outcome.masks.memory;
   view.keypoints.reserve(outcome.tracking.keypoints.size());
   for (const tracking::KeypointStatus& k : outcome.tracking.keypoints) {
@@ -317,8 +319,8 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-octomap", args->no_octomap, "Do not build the octree map");
   cmd->add_flag("--no-inpainting", args->no_inpainting, "Do not repair keyframes");
   cmd->add_flag("--save-masks", args->save_masks,
-                "Write the dynamic masks to <out>/masks/ (combined; the CNN, geometry and memory "
-                "parts in subfolders)");
+                "Write the dynamic masks to <out>/masks/ (combined; the CNN, geometry, memory and "
+                "free-space parts in subfolders)");
   cmd->add_flag("--save-inpainted", args->save_inpainted,
                 "Write repaired keyframes to <out>/inpainted/");
   cmd->add_option("--save-map", args->save_map,

@@ -103,8 +103,10 @@ TEST(SystemConfig, ValueOutOfRangeNamesFileLineAndKey) {
   EXPECT_EQ(threads.rfind("t.yaml:3: ", 0), 0u) << threads;
   EXPECT_NE(threads.find("dynamic.segmentation.num_threads"), std::string::npos) << threads;
   // 2 * dilation_px + 1 overflowed an int in the geometry check.
-  const std::string dilation = message_of(
-      [] { parse_system_config("dynamic:\n  geometry:\n    dilation_px: 100000\n", "d.yaml"); });
+  const std::string dilation = message_of([] {
+    parse_system_config("dynamic:\n  use_geometry: true\n  geometry:\n    dilation_px: 100000\n",
+                        "d.yaml");
+  });
   EXPECT_NE(dilation.find("dynamic.geometry.dilation_px"), std::string::npos) << dilation;
 }
 

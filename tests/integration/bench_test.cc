@@ -147,12 +147,12 @@ TEST_F(Bench, WritesBothColumnsAndTheImprovement) {
 
   ASSERT_EQ(tables["masks"].size(), 2u);
   for (const json& row : tables["masks"]) {
-    for (const char* source : {"cnn", "geometry", "combined"}) {
+    for (const char* source : {"cnn", "geometry", "free_space", "combined"}) {
       EXPECT_EQ(row[source]["frames"], 40) << source;
     }
   }
   // The sitting sequence's box moves during the run: its pixels were found and scored. (No CNN:
-  // --segmentation none keeps the test fast; the masks are the geometry check's.)
+  // --segmentation none keeps the test fast; the masks are the free-space check's.)
   const json& box = tables["masks"][1]["moved_object"];
   ASSERT_TRUE(box.is_object()) << tables["masks"][1].dump();
   EXPECT_GT(box["frames"].get<int>(), 10);

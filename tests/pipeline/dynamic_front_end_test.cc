@@ -144,6 +144,7 @@ TEST_F(FolderBackend, AMissingFolderEndsTheRunInsteadOfFallingBack) {
 TEST(DynamicFrontEndCache, CulledKeyframesLeaveFirstThenTheOldest) {
   DynamicConfig config;
   config.segmentation.backend = segmentation::Backend::kNone;
+  config.use_geometry = true;  // reference_views() serves the sparse geometry check
   config.keyframe_depth_cache = 3;
   const camera::PinholeCamera camera = synthetic::tum3_camera();
   DynamicFrontEnd front_end(config, camera, "");

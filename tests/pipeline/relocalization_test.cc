@@ -147,8 +147,9 @@ TEST(Relocalization, AFrameRelocalizedAtOnceKeepsNoMaskOfTheFailedPrediction) {
   const camera::PinholeCamera& camera = source->camera();
   SystemConfig config = core_config();
   config.dynamic.enabled = true;
-  config.dynamic.segmentation.backend = segmentation::Backend::kNone;  // geometry check alone
-  ASSERT_TRUE(config.dynamic.use_geometry);
+  config.dynamic.segmentation.backend = segmentation::Backend::kNone;  // geometry checks alone
+  config.dynamic.use_geometry = true;  // the sparse check beside the free-space one
+  ASSERT_TRUE(config.dynamic.free_space.enabled);
   ASSERT_TRUE(config.tracking.relocalization.same_frame);
   System system(config, camera, vocabulary);
   double stamp = 0.0;
@@ -166,11 +167,15 @@ TEST(Relocalization, AFrameRelocalizedAtOnceKeepsNoMaskOfTheFailedPrediction) {
   EXPECT_TRUE(outcome.tracking.relocalized_at_once);
   EXPECT_EQ(system.statistics().relocalizations_in_same_frame, 1u);
   EXPECT_EQ(system.statistics().frames_lost, 0u);
-  // The geometry check ran at the failed prediction and found seeds there; its mask (and with
-  // it what the keyframe and the dense map would take from the combined mask) was discarded.
+  // The geometry checks ran at the failed prediction and found seeds there; their masks (and
+  // with them what the keyframe and the dense map would take from the combined mask) were
+  // discarded.
   EXPECT_GT(outcome.masks.geometry_stats.points_tested, 0);
   EXPECT_GT(outcome.masks.geometry_stats.points_dynamic, 0);
   EXPECT_TRUE(outcome.masks.geometry.empty());
+  EXPECT_GT(outcome.masks.free_space_stats.samples_dynamic, 0);  // the same for the free space
+  EXPECT_TRUE(outcome.masks.free_space.empty());
+  EXPECT_TRUE(outcome.masks.free_space_votes.free_votes.empty());
   EXPECT_TRUE(outcome.masks.combined.empty() || cv::countNonZero(outcome.masks.combined) == 0);
   // The pose: frame 5's, in the map's world (frame 0's camera).
   const SE3 T_c0_w = source->render_frame(0).T_w_c.inverse();

@@ -31,7 +31,7 @@
 namespace ddl::dynamics {
 
 struct FreeSpaceConfig {
-  bool enabled = false;  // false = the sparse geometry check (Algorithm 1) alone
+  bool enabled = true;  // false = no free-space check (the paper: CNN and Algorithm 1 only)
   /// Keyframes that vote: at most this many of the cached ones that see the frame, spread evenly
   /// over them from the oldest to the newest (views from other times saw the space people now
   /// stand in while they were elsewhere).

@@ -51,7 +51,7 @@ constexpr std::array<ErrorTable, 3> kErrorTables = {{
      {"rot_rmse_deg_per_s", "rot_mean_deg_per_s", "rot_median_deg_per_s", "rot_std_deg_per_s"}},
 }};
 
-constexpr std::array<const char*, 3> kMaskSources = {"cnn", "geometry", "combined"};
+constexpr std::array<const char*, 4> kMaskSources = {"cnn", "geometry", "free_space", "combined"};
 
 json error_stats(const json& summary, const ErrorTable& table) {
   json out = json::object();
@@ -215,11 +215,11 @@ std::string benchmark_tables_markdown(const json& tables) {
     md += "No sequence has ground-truth masks (dynamic_mask/).\n";
   } else {
     md +=
-        "| sequence | frames | CNN IoU | P | R | geometry IoU | P | R | combined IoU | P | R | "
-        "moved box recall: CNN | geometry | combined | frames without dynamic truth | combined "
-        "FP px on them |\n";
+        "| sequence | frames | CNN IoU | P | R | geometry IoU | P | R | free space IoU | P | R | "
+        "combined IoU | P | R | moved box recall: CNN | geometry | free space | combined | frames "
+        "without dynamic truth | combined FP px on them |\n";
     md += "| --- |";
-    for (int i = 0; i < 15; ++i) md += " ---: |";
+    for (int i = 0; i < 19; ++i) md += " ---: |";
     md += "\n";
     for (const json& r : tables["masks"]) {
       md += "| " + r.at("sequence").get<std::string>() + " | " +

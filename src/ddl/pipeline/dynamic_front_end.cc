@@ -226,6 +226,8 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclu
   };
   const dynamics::FreeSpaceConfig& f = config_.free_space;
   masks.free_space_stats.regions_dropped = 0;  // of this call (a relocalized frame calls twice)
+  masks.flagged = dynamics::combine_masks(dynamics::combine_masks(masks.cnn, masks.geometry),
+                                          dynamics::combine_masks(masks.memory, masks.free_space));
   masks.combined = dynamics::combine_masks(
       dynamics::combine_masks(judged(masks.cnn, true), judged(masks.geometry, f.judge_geometry)),
       dynamics::combine_masks(judged(masks.memory, true), masks.free_space));
@@ -240,7 +242,7 @@ std::optional<map::KeyFrameImages> DynamicFrontEnd::keyframe_images(map::KeyFram
 }
 
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
-                                        const cv::Mat& dynamic_mask) {
+                                        const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask) {
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
   if (!config_.keeps_keyframe_images()) return;
   // A mask that marked nothing is kept as none: the check reads an empty mask as unmasked.
@@ -248,8 +250,8 @@ void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const 
   const cv::Mat kept_mask = any_dynamic ? dynamic_mask : cv::Mat();
   KeyframeImages images{keyframe, depth_m, kept_mask, {}};
   if (config_.free_space.enabled) {
-    images.free_space =
-        dynamics::prepare_free_space_view(SE3(), depth_m, kept_mask, config_.free_space);
+    images.free_space = dynamics::prepare_free_space_view(
+        SE3(), depth_m, flagged_mask.empty() ? kept_mask : flagged_mask, config_.free_space);
   }
   std::lock_guard lock(cache_mutex_);
   depth_cache_[keyframe->id()] = std::move(images);

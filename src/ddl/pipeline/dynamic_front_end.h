@@ -47,6 +47,10 @@ struct DynamicMasks {
   /// free_space.judge_geometry, of the geometry mask) that the free-space votes saw as static
   /// left out (empty when all are)
   cv::Mat combined;
+  /// The union of the four before the judging: what the keyframe's free-space view counts as
+  /// masked. Judged regions would otherwise feed back: dropped in one keyframe, they become its
+  /// static votes, and the next judging drops more (a person sitting still vanished).
+  cv::Mat flagged;
   cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
                       // (CNN part before ORB extraction, geometry part after the low-cost pose)
   dynamics::GeometryCheckStats geometry_stats;
@@ -144,8 +148,10 @@ class DynamicFrontEnd {
 
   /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
   /// With the dynamic memory on, also its static veto view (`dynamic_mask`: the combined mask).
+  /// The free-space view takes `flagged_mask` (DynamicMasks::flagged) when given, else
+  /// `dynamic_mask` (a keyframe of a loaded map).
   void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
-                         const cv::Mat& dynamic_mask);
+                         const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask = cv::Mat());
   /// The cached depth image and mask of a keyframe (for the map file), if the cache holds it.
   std::optional<map::KeyFrameImages> keyframe_images(map::KeyFrameId id) const;
 

@@ -441,7 +441,8 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
       insertion.close(queued);
       if (!queued) rethrow_worker_error();
     }
-    dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m, outcome.masks.combined);
+    dynamic_->remember_keyframe(result.new_keyframe, frame.depth_m, outcome.masks.combined,
+                                outcome.masks.flagged);
     dense_->submit({result.new_keyframe, frame.rgb, frame.depth_m, outcome.masks.combined});
     if (!threaded) handle_keyframe_inline(result.new_keyframe);
   }
