@@ -2,9 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <opencv2/imgproc.hpp>
 
 #include "config_error_check.h"
+#include "ddl/core/error.h"
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/synthetic/sequence.h"
 
@@ -127,6 +129,32 @@ TEST(FreeSpaceCheck, ARegionTheKeyframesSawAsStaticSurfaceIsDropped) {
   EXPECT_EQ(cv::countNonZero(drop_static_regions(mask, votes, keep_all) != mask), 0);
 }
 
+// carve_static_samples: a CNN mask that spills onto the wall around the people (the upsampled
+// low-resolution mask) keeps its regions, which are mostly people, but loses the spill's cells
+// the keyframes saw as static wall.
+TEST(FreeSpaceCheck, CarvingClearsTheSpillOntoTheWallAndKeepsThePeople) {
+  const Scene scene("syn_walking_rpy");
+  FreeSpaceConfig config;
+  const std::vector<FreeSpaceView> views = scene.views(40, 400, 15, true, config);
+  const synthetic::FrameData f = scene.frame(400);
+  FreeSpaceVotes votes;
+  check(scene, f, views, f.T_w_c.inverse(), config, &votes);
+  config.carve_static_samples = false;
+  const cv::Mat people = f.dynamic_mask != 0;
+  cv::Mat spilled;
+  cv::dilate(people, spilled, cv::getStructuringElement(cv::MORPH_ELLIPSE, {17, 17}));
+  const cv::Mat spill = spilled & ~people & (scene.depth_m(f) > 0.3f);
+  const int people_px = cv::countNonZero(people), spill_px = cv::countNonZero(spill);
+  ASSERT_GT(spill_px, 3000);
+  const cv::Mat kept = drop_static_regions(spilled, votes, config);
+  EXPECT_GT(cv::countNonZero(kept & people), 0.95 * people_px) << "the regions are kept";
+  EXPECT_GT(cv::countNonZero(kept & spill), 0.9 * spill_px) << "and whole, without carving";
+  config.carve_static_samples = true;
+  const cv::Mat carved = drop_static_regions(spilled, votes, config);
+  EXPECT_GT(cv::countNonZero(carved & people), 0.9 * people_px);  // measured 0.997
+  EXPECT_LT(cv::countNonZero(carved & spill), 0.6 * spill_px);    // measured 0.446
+}
+
 TEST(FreeSpaceCheck, APersonSittingStillIsKeptWhereKeyframesMaskedThemAsOftenAsNot) {
   // syn_sitting_static: two people seated behind the desk, who barely move. Half the keyframes
   // masked them (a CNN that finds them in one keyframe of two), the other half saw their surface
@@ -172,6 +200,53 @@ TEST(FreeSpaceCheck, ViewsLookingElsewhereAreNotChosenAndTheChosenSpanThePast) {
   EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
 }
 
+// The packed view (one 16-bit pair per pixel): [0] the window minimum over valid depths in mm,
+// [1] the depth rounded to even mm plus the mask bit. Readings of 65 m and beyond are holes (a
+// depth of 65.5 m once overflowed into a masked pixel; review, stop 34).
+TEST(FreeSpaceCheck, TheViewPacksWindowMinimaDepthsAndTheMaskBit) {
+  FreeSpaceConfig config;
+  config.window_radius_px = 1;
+  config.reference_mask_margin_px = 0;
+  cv::Mat depth(5, 8, CV_32FC1, cv::Scalar(2.0f));
+  depth.at<float>(1, 1) = 0.0f;     // a hole: not the window's minimum
+  depth.at<float>(1, 5) = 1.5f;     // the nearest of its window
+  depth.at<float>(3, 3) = 2.0033f;  // rounded to even millimetres
+  depth.at<float>(3, 6) = 8.0f;     // beyond max_depth_m (6 m): kept in a view
+  depth.at<float>(0, 7) = 70.0f;    // beyond the 16-bit millimetres: a hole
+  cv::Mat mask = cv::Mat::zeros(depth.size(), CV_8UC1);
+  mask.at<std::uint8_t>(3, 3) = 255;
+  const FreeSpaceView view = prepare_free_space_view(SE3(), depth, mask, config);
+  ASSERT_EQ(view.packed_mm.type(), CV_16UC2);
+  const auto at = [&](int v, int u) { return view.packed_mm.at<cv::Vec<std::uint16_t, 2>>(v, u); };
+  EXPECT_EQ(at(1, 1)[0], 2000);  // the hole's window holds valid 2 m depths
+  EXPECT_EQ(at(1, 1)[1], 0);     // no depth of its own
+  EXPECT_EQ(at(0, 4)[0], 1500);
+  EXPECT_EQ(at(2, 6)[0], 1500);
+  EXPECT_EQ(at(3, 3)[1], 2004 + 1);  // 2003.3 mm: 1001.65 half-mm rounds to 1002, masked
+  EXPECT_EQ(at(3, 2)[1], 2000);      // beside it, unmasked
+  EXPECT_EQ(at(3, 6)[1], 8000);
+  EXPECT_EQ(at(0, 7)[1], 0);     // no depth
+  EXPECT_EQ(at(0, 7)[0], 2000);  // and not part of the window minimum either
+}
+
+// The public functions check what they are given: default votes mean no check ran, votes of
+// another image size are an error, not an out-of-bounds read.
+TEST(FreeSpaceCheck, VotesOfNoImageOrAnotherImageAreNotRead) {
+  const FreeSpaceConfig config;
+  const cv::Mat depth(48, 64, CV_32FC1, cv::Scalar(2.0f));
+  cv::Mat mask = cv::Mat::zeros(depth.size(), CV_8UC1);
+  mask(cv::Rect(10, 10, 20, 20)).setTo(255);
+  const FreeSpaceVotes none;
+  EXPECT_TRUE(free_space_mask(depth, none, config).empty());
+  EXPECT_EQ(cv::countNonZero(drop_static_regions(mask, none, config)), 400);
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  const cv::Mat full(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+  const FreeSpaceVotes other = free_space_votes(
+      full, SE3(), {prepare_free_space_view(SE3(), full, cv::Mat(), config)}, camera, config);
+  EXPECT_THROW(free_space_mask(depth, other, config), Error);
+  EXPECT_THROW(drop_static_regions(mask, other, config), Error);
+}
+
 TEST(FreeSpaceCheck, ConfigErrorsNameTheKey) {
   EXPECT_NO_THROW(FreeSpaceConfig{}.validate());
   FreeSpaceConfig config;
@@ -186,6 +261,10 @@ TEST(FreeSpaceCheck, ConfigErrorsNameTheKey) {
   config.min_depth_m = 0.0;  // 0 is "no depth"
   EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
                                                         "dynamic.free_space.min_depth_m"));
+  config = {};
+  config.min_region_px = std::numeric_limits<int>::max();
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.free_space.min_region_px"));
   config = {};
   config.max_static_region_share = 1.5;
   EXPECT_TRUE(test_support::throws_config_error_for_key(

@@ -183,6 +183,49 @@ TEST(DynamicFrontEndCache, CulledKeyframesLeaveFirstThenTheOldest) {
   EXPECT_TRUE(has_depth(fifth));
 }
 
+// The free-space check's voters: a map reset leaves none of the old map's keyframes, although
+// they may live on a while (the dense stage holds them until it takes its reset); keyframes of a
+// loaded map vote whatever their stamps, this session's only once they are old enough
+// (review, stop 34).
+TEST(DynamicFrontEndCache, FreeSpaceVotersOfTheSessionsMap) {
+  DynamicConfig config;
+  config.segmentation.backend = segmentation::Backend::kNone;
+  config.free_space.enabled = true;
+  config.free_space.min_reference_age_s = 0.3;
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  map::Map map;
+  auto keyframe = [&](double timestamp_s) {
+    return std::make_shared<map::KeyFrame>(map.next_keyframe_id(), timestamp_s,
+                                           std::make_shared<map::FrameFeatures>(), SE3());
+  };
+  const cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar(2.0f));
+  io::RgbdFrame frame;
+  frame.timestamp_s = 10.0;
+  frame.depth_m = depth;
+  {
+    DynamicFrontEnd front_end(config, camera, "");
+    const std::vector<map::KeyFramePtr> old_map{keyframe(1.0), keyframe(2.0)};
+    for (const auto& kf : old_map) front_end.remember_keyframe(kf, depth, cv::Mat());
+    const map::KeyFrameId first_new = map.next_keyframe_id();
+    const map::KeyFramePtr fresh = keyframe(3.0);
+    front_end.remember_keyframe(fresh, depth, cv::Mat());
+    ASSERT_EQ(front_end.free_space_views(frame, SE3()).size(), 3u) << "precondition";
+    front_end.forget_keyframes_before(first_new);
+    EXPECT_EQ(front_end.free_space_views(frame, SE3()).size(), 1u);
+  }
+  {
+    DynamicFrontEnd front_end(config, camera, "");
+    const map::KeyFramePtr later_this_session = keyframe(12.0);
+    front_end.remember_keyframe(later_this_session, depth, cv::Mat());
+    const map::KeyFramePtr too_young = keyframe(9.9);
+    front_end.remember_keyframe(too_young, depth, cv::Mat());
+    EXPECT_EQ(front_end.free_space_views(frame, SE3()).size(), 0u);
+    const map::KeyFramePtr loaded = keyframe(12.0);
+    front_end.remember_loaded_keyframe(loaded, depth, cv::Mat());
+    EXPECT_EQ(front_end.free_space_views(frame, SE3()).size(), 1u);
+  }
+}
+
 TEST(DynamicFrontEndModel, AMissingModelFallsBackToGeometryOnly) {
   DynamicConfig config;
   config.segmentation.model_path = "/nonexistent/model.onnx";

@@ -12,18 +12,42 @@ namespace ddl::dynamics {
 namespace {
 
 constexpr int kOverlapGridPx = 40;  // spacing of the coarse grid that measures a view's overlap
+constexpr double kMaxPackedDepthM = 65.0;  // views' readings in mm fit 16 bits below this
 
 /// The sample lattice of an image: sample (i, j) sits at pixel (j * s + s / 2, i * s + s / 2).
 struct Lattice {
   int stride, rows, cols;
-  Lattice(const cv::Mat& image, int s)
-      : stride(s), rows((image.rows - s / 2 + s - 1) / s), cols((image.cols - s / 2 + s - 1) / s) {}
+  Lattice(const cv::Size& size, int s)
+      : stride(s),
+        rows((size.height - s / 2 + s - 1) / s),
+        cols((size.width - s / 2 + s - 1) / s) {}
+  Lattice(const cv::Mat& image, int s) : Lattice(image.size(), s) {}
   int u(int j) const { return j * stride + stride / 2; }
   int v(int i) const { return i * stride + stride / 2; }
 };
 
 bool in_range(float z, const FreeSpaceConfig& config) {
   return z >= config.min_depth_m && z <= config.max_depth_m;
+}
+
+/// The votes must be those of an image of `size` (free_space_votes on it).
+void check_votes_fit(const FreeSpaceVotes& votes, const cv::Size& size, const char* caller) {
+  bool fit = votes.stride >= 1 && votes.depth_m.type() == CV_32FC1 && votes.depth_m.size() == size;
+  if (fit) {
+    const Lattice lattice(size, votes.stride);
+    for (const cv::Mat* grid :
+         {&votes.free_votes, &votes.static_votes, &votes.masked_votes, &votes.has_depth}) {
+      fit = fit && grid->type() == CV_8UC1 && grid->rows == lattice.rows &&
+            grid->cols == lattice.cols;
+    }
+  }
+  if (!fit) {
+    throw Error(
+        fmt::format("{}: the votes (stride {}, {}x{} samples) are not those of a {}x{} "
+                    "image",
+                    caller, votes.stride, votes.free_votes.cols, votes.free_votes.rows, size.width,
+                    size.height));
+  }
 }
 
 }  // namespace
@@ -47,7 +71,8 @@ void FreeSpaceConfig::validate() const {
   if (min_free_votes < 1 || min_free_votes > max_reference_keyframes)
     fail("min_free_votes", "must be in 1..max_reference_keyframes");
   if (!(max_static_per_free >= 0)) fail("max_static_per_free", "must be >= 0");
-  if (min_region_px < 0) fail("min_region_px", "must be >= 0");
+  if (min_region_px < 0 || min_region_px > 100'000'000)
+    fail("min_region_px", "must be in 0..100000000");
   if (!(max_static_region_share >= 0 && max_static_region_share <= 1))
     fail("max_static_region_share", "must be in [0, 1]");
 }
@@ -56,17 +81,23 @@ FreeSpaceView prepare_free_space_view(const SE3& T_w_c, const cv::Mat& depth_m,
                                       const cv::Mat& dynamic_mask, const FreeSpaceConfig& config) {
   FreeSpaceView view;
   view.T_w_c = T_w_c;
-  // The window minimum over valid depths: holes (0) must not count as near, so they become +inf
-  // for the erosion and 0 again after it.
-  cv::Mat nearest = depth_m.clone();
-  nearest.setTo(std::numeric_limits<float>::infinity(), depth_m <= 0.0f);
+  // Every reading counts, also those outside the samples' [min_depth_m, max_depth_m]: a far one
+  // still saw the space before it empty, a near one hid what lies behind it. Only readings the
+  // 16-bit packing cannot hold (65 m and beyond) are holes, like those without depth. The window
+  // minimum over valid depths: holes must not count as near, so they become +inf for the
+  // erosion and 0 again after it.
+  cv::Mat valid_depth = depth_m.clone();
+  const cv::Mat hole = (depth_m <= 0.0f) | (depth_m >= static_cast<float>(kMaxPackedDepthM));
+  valid_depth.setTo(0.0f, hole);
+  cv::Mat nearest = valid_depth.clone();
+  nearest.setTo(std::numeric_limits<float>::infinity(), hole);
   const int r = config.window_radius_px;
   if (r > 0) {
     cv::erode(nearest, nearest, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
   }
   nearest.setTo(0.0f, nearest == std::numeric_limits<float>::infinity());
   cv::Mat seen;
-  depth_m.convertTo(seen, CV_16U, 500.0);  // half millimetres: doubled below, the low bit freed
+  valid_depth.convertTo(seen, CV_16U, 500.0);  // half millimetres: doubled, the low bit freed
   seen *= 2;
   if (!dynamic_mask.empty()) {
     cv::Mat masked = dynamic_mask != 0;
@@ -77,7 +108,7 @@ FreeSpaceView prepare_free_space_view(const SE3& T_w_c, const cv::Mat& depth_m,
     cv::add(seen, cv::Scalar(1), seen, masked & (seen > 0));
   }
   cv::Mat channels[2];
-  nearest.convertTo(channels[0], CV_16U, 1000.0);  // saturates at 65.5 m, beyond max_depth_m
+  nearest.convertTo(channels[0], CV_16U, 1000.0);  // below 65 000: readings of 65 m are holes
   channels[1] = seen;
   cv::merge(channels, 2, view.packed_mm);
   return view;
@@ -130,6 +161,7 @@ FreeSpaceVotes free_space_votes(const cv::Mat& depth_m, const SE3& T_c_w,
   votes.static_votes = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
   votes.masked_votes = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
   votes.has_depth = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
+  votes.depth_m = depth_m;
   std::vector<cv::Point> samples;
   std::vector<Eigen::Vector3f> points_c;
   for (int i = 0; i < lattice.rows; ++i) {
@@ -183,6 +215,8 @@ FreeSpaceVotes free_space_votes(const cv::Mat& depth_m, const SE3& T_c_w,
 
 cv::Mat free_space_mask(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
                         const FreeSpaceConfig& config, FreeSpaceStats* stats) {
+  if (votes.free_votes.empty()) return {};
+  check_votes_fit(votes, depth_m.size(), "free_space_mask");
   const Lattice lattice(depth_m, votes.stride);
   cv::Mat dynamic = cv::Mat::zeros(lattice.rows, lattice.cols, CV_8UC1);
   int samples = 0, samples_dynamic = 0;
@@ -268,7 +302,10 @@ cv::Mat free_space_mask(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
 
 cv::Mat drop_static_regions(const cv::Mat& mask, const FreeSpaceVotes& votes,
                             const FreeSpaceConfig& config, FreeSpaceStats* stats) {
-  if (mask.empty() || config.max_static_region_share >= 1.0) return mask;
+  if (mask.empty() || votes.free_votes.empty() || config.max_static_region_share >= 1.0) {
+    return mask;
+  }
+  check_votes_fit(votes, mask.size(), "drop_static_regions");
   cv::Mat binary = mask != 0;
   cv::Mat labels;
   const int n = cv::connectedComponents(binary, labels, 8, CV_32S);
@@ -290,13 +327,25 @@ cv::Mat drop_static_regions(const cv::Mat& mask, const FreeSpaceVotes& votes,
     if (drop[r]) ++dropped;
   }
   if (stats != nullptr) stats->regions_dropped += dropped;
-  if (dropped == 0) return mask;
+  if (dropped == 0 && !config.carve_static_samples) return mask;
   cv::Mat out = mask.clone();
+  const int s = votes.stride;
   for (int v = 0; v < out.rows; ++v) {
     const int* l = labels.ptr<int>(v);
     std::uint8_t* o = out.ptr<std::uint8_t>(v);
+    const int i = std::min(lattice.rows - 1, v / s);
     for (int u = 0; u < out.cols; ++u) {
-      if (drop[static_cast<std::size_t>(l[u])]) o[u] = 0;
+      if (l[u] == 0) continue;
+      if (drop[static_cast<std::size_t>(l[u])]) {
+        o[u] = 0;
+      } else if (config.carve_static_samples) {
+        const int j = std::min(lattice.cols - 1, u / s);
+        if (votes.has_depth.at<std::uint8_t>(i, j) == 0 || !votes.seen_static(i, j)) continue;
+        // A pixel of the cell at another depth (a person in front of the wall sample) stays.
+        const float z = votes.depth_m.at<float>(v, u);
+        const float zs = votes.depth_m.at<float>(lattice.v(i), lattice.u(j));
+        if (z <= 0.0f || std::abs(z - zs) < config.threshold_at(zs)) o[u] = 0;
+      }
     }
   }
   return out;

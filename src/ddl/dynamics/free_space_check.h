@@ -43,8 +43,11 @@ struct FreeSpaceConfig {
   int sample_stride_px = 4;                 // one sample per stride x stride pixels
   double depth_threshold_m = 0.05;          // tau at z = 0
   double depth_threshold_quadratic = 0.02;  // tau grows by this times z^2 (metres per metre^2)
-  double min_depth_m = 0.3;                 // samples and views closer than this are ignored
-  double max_depth_m = 6.0;                 // and farther than this
+  /// Samples of the frame nearer than this are not tested. The keyframes' views keep every
+  /// reading below 65 m: a far one still saw the space before it empty, a near one hid what lies
+  /// behind it.
+  double min_depth_m = 0.3;
+  double max_depth_m = 6.0;  // samples farther than this are not tested
   /// A free vote needs every valid depth of the keyframe's (2r + 1)^2 window around the
   /// projection to lie beyond the point by tau: a projection a few pixels off at a depth edge is
   /// not taken for free space.
@@ -59,6 +62,10 @@ struct FreeSpaceConfig {
   /// from the combined mask when more than this share of its samples with depth had no free vote
   /// and more static votes than masked ones. 1 = keep every region.
   double max_static_region_share = 0.3;
+  /// drop_static_regions also clears, inside the regions it keeps, the pixels around each sample
+  /// the keyframes saw as static background whose depth is within tau of the sample's (a CNN
+  /// mask's spill onto the wall beside a person).
+  bool carve_static_samples = true;
   /// Whether drop_static_regions judges the sparse geometry check's regions too (the CNN's and
   /// the memory's always are, unless max_static_region_share is 1).
   bool judge_geometry = true;
@@ -94,6 +101,7 @@ struct FreeSpaceVotes {
   cv::Mat static_votes;
   cv::Mat masked_votes;  // the keyframe saw the same surface inside its dynamic mask
   cv::Mat has_depth;     // CV_8UC1 non-zero = the sample had depth in range
+  cv::Mat depth_m;       // the frame's depth image the votes are for (shares its data)
 
   /// Whether the keyframes saw the sample as static background: no free vote, and more static
   /// votes than masked ones.

@@ -12,6 +12,18 @@
 #include "ddl/segmentation/upright.h"
 
 namespace ddl::pipeline {
+namespace {
+
+/// The multi-view checks a configuration runs, for messages.
+const char* multi_view_checks(const DynamicConfig& config) {
+  if (config.free_space.enabled && config.use_geometry)
+    return "free-space and sparse geometry checks";
+  if (config.free_space.enabled) return "free-space check";
+  if (config.use_geometry) return "sparse geometry check";
+  return "none configured: no dynamic mask at all";
+}
+
+}  // namespace
 
 void DynamicConfig::validate() const {
   if (feature_border_px < 0 || feature_border_px > 50) {
@@ -50,9 +62,9 @@ DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::Pinh
   } catch (const segmentation::ModelNotFoundError& e) {
     if (!config_.fallback_without_model) throw;
     spdlog::warn(
-        "{}; running with the multi-view geometry check only (set "
+        "{}; running with the multi-view checks only ({}; set "
         "dynamic.segmentation.model_path or --shared-dir)",
-        e.what());
+        e.what(), multi_view_checks(config_));
   }
 }
 
@@ -167,7 +179,12 @@ std::vector<dynamics::FreeSpaceView> DynamicFrontEnd::free_space_views(const io:
     for (const auto& [id, images] : depth_cache_) {
       const map::KeyFramePtr kf = images.keyframe.lock();
       if (!kf || kf->is_bad() || images.free_space.packed_mm.empty()) continue;
-      if (frame.timestamp_s - kf->timestamp_s() < config_.free_space.min_reference_age_s) continue;
+      // The age rule holds within a session: a loaded map's keyframes saw the scene at another
+      // time whatever their stamps say.
+      if (!images.loaded &&
+          frame.timestamp_s - kf->timestamp_s() < config_.free_space.min_reference_age_s) {
+        continue;
+      }
       views.push_back(images.free_space);
       poses.push_back(kf->T_w_c());
     }
@@ -243,12 +260,29 @@ std::optional<map::KeyFrameImages> DynamicFrontEnd::keyframe_images(map::KeyFram
 
 void DynamicFrontEnd::remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
                                         const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask) {
+  keep_keyframe(keyframe, depth_m, dynamic_mask, flagged_mask, false);
+}
+
+void DynamicFrontEnd::remember_loaded_keyframe(const map::KeyFramePtr& keyframe,
+                                               const cv::Mat& depth_m,
+                                               const cv::Mat& dynamic_mask) {
+  keep_keyframe(keyframe, depth_m, dynamic_mask, cv::Mat(), true);
+}
+
+void DynamicFrontEnd::forget_keyframes_before(map::KeyFrameId first_kept) {
+  std::lock_guard lock(cache_mutex_);
+  depth_cache_.erase(depth_cache_.begin(), depth_cache_.lower_bound(first_kept));
+}
+
+void DynamicFrontEnd::keep_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
+                                    const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask,
+                                    bool loaded) {
   if (memory_enabled()) memory_.add_static_view(keyframe->T_w_c(), depth_m, dynamic_mask);
   if (!config_.keeps_keyframe_images()) return;
   // A mask that marked nothing is kept as none: the check reads an empty mask as unmasked.
   const bool any_dynamic = !dynamic_mask.empty() && cv::countNonZero(dynamic_mask) > 0;
   const cv::Mat kept_mask = any_dynamic ? dynamic_mask : cv::Mat();
-  KeyframeImages images{keyframe, depth_m, kept_mask, {}};
+  KeyframeImages images{keyframe, depth_m, kept_mask, {}, loaded};
   if (config_.free_space.enabled) {
     images.free_space = dynamics::prepare_free_space_view(
         SE3(), depth_m, flagged_mask.empty() ? kept_mask : flagged_mask, config_.free_space);

@@ -146,18 +146,28 @@ class DynamicFrontEnd {
   void finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
                     const cv::Mat& moved_exclusion) const;
 
-  /// Keeps the keyframe's depth image for later geometry checks (bounded cache).
+  /// Keeps the keyframe's depth image for later multi-view checks (bounded cache).
   /// With the dynamic memory on, also its static veto view (`dynamic_mask`: the combined mask).
   /// The free-space view takes `flagged_mask` (DynamicMasks::flagged) when given, else
-  /// `dynamic_mask` (a keyframe of a loaded map).
+  /// `dynamic_mask`.
   void remember_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
                          const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask = cv::Mat());
+  /// remember_keyframe for a keyframe of a map loaded from a file: its free-space view counts
+  /// the stored (combined) mask as masked, and it votes whatever its timestamp (the age rule,
+  /// free_space.min_reference_age_s, compares stamps of one session).
+  void remember_loaded_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
+                                const cv::Mat& dynamic_mask);
+  /// Forgets the cached images of the keyframes with ids below `first_kept` (map reset: those
+  /// keyframes are in a world frame that is gone, although they may still be alive).
+  void forget_keyframes_before(map::KeyFrameId first_kept);
   /// The cached depth image and mask of a keyframe (for the map file), if the cache holds it.
   std::optional<map::KeyFrameImages> keyframe_images(map::KeyFrameId id) const;
 
  private:
   /// The turn that makes `frame` upright for the CNN, when one is configured and needed.
   std::optional<double> upright_turn(const io::RgbdFrame& frame) const;
+  void keep_keyframe(const map::KeyFramePtr& keyframe, const cv::Mat& depth_m,
+                     const cv::Mat& dynamic_mask, const cv::Mat& flagged_mask, bool loaded);
 
   DynamicConfig config_;
   camera::PinholeCamera camera_;
@@ -172,8 +182,9 @@ class DynamicFrontEnd {
     cv::Mat depth_m;
     cv::Mat dynamic_mask;                // empty when the mask marked nothing
     dynamics::FreeSpaceView free_space;  // its images prepared once (pose set when it votes)
+    bool loaded = false;                 // from a map file (remember_loaded_keyframe)
   };
-  std::map<map::KeyFrameId, KeyframeImages> depth_cache_;  // for the geometry check
+  std::map<map::KeyFrameId, KeyframeImages> depth_cache_;  // for the multi-view checks
   dynamics::DynamicMemory memory_;                         // tracking thread only
 };
 

@@ -300,7 +300,8 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   summary["timing_ms"] = timing;
   summary["dynamic"] = {{"enabled", system.config().dynamic.enabled},
                         {"segmenter", system.dynamic_front_end().segmenter_description()},
-                        {"geometry_check", system.config().dynamic.use_geometry}};
+                        {"geometry_check", system.config().dynamic.use_geometry},
+                        {"free_space_check", system.config().dynamic.free_space.enabled}};
   for (const std::string& f : map_files) {
     summary["outputs"]["map"].push_back(fs::path(f).filename().string());
   }

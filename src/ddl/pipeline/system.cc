@@ -126,8 +126,9 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     return {};
   }
   if (last_reference_->is_bad()) {
-    // Culled since the last frame (threaded mode): nothing to check against this frame.
+    // Culled since the last frame (threaded mode): no low-cost pose, nothing to check this frame.
     if (config_.dynamic.use_geometry) ++stats_.geometry_checks_without_reference;
+    if (use_free_space) ++stats_.free_space_checks_skipped;
     return {};
   }
   // Loop closing may move the keyframes between the low-cost pose and the reading of the
@@ -256,7 +257,7 @@ map::MapFileContents System::load_map(const std::string& path) {
     database_->add(keyframe->id(), keyframe->bow());
     // The stored depth images become the geometry check's references again.
     if (const auto it = contents.images.find(keyframe->id()); it != contents.images.end()) {
-      dynamic_->remember_keyframe(keyframe, it->second.depth_m, it->second.dynamic_mask);
+      dynamic_->remember_loaded_keyframe(keyframe, it->second.depth_m, it->second.dynamic_mask);
     }
   }
   // The scans the dense stage kept in the run that made the map: its octree grows on them.
@@ -411,6 +412,9 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     dynamic_->forget_dynamic_surfaces();
     memory_anchor_->reset();
     const map::KeyFrameId first_valid_keyframe = map_->next_keyframe_id();
+    // The old map's keyframes may live on a while (the dense stage holds them until it takes its
+    // reset), in a world frame that is gone: they must not vote in the free-space check.
+    dynamic_->forget_keyframes_before(first_valid_keyframe);
     mapper_->request_reset(first_valid_keyframe);
     loop_closer_->request_reset(first_valid_keyframe);
     dense_->reset();

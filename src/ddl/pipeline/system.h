@@ -81,7 +81,8 @@ struct SystemStatistics {
   // ... without a reference to test against: the reference keyframe culled (threaded), or no
   // reference with a depth image (dynamic.keyframe_depth_cache)
   std::size_t geometry_checks_without_reference = 0;
-  // free-space checks not run: a loop correction or global-BA merge moved the keyframes (threaded)
+  // free-space checks not run: a loop correction or global-BA merge moved the keyframes, or the
+  // reference keyframe was culled since the previous frame (threaded)
   std::size_t free_space_checks_skipped = 0;
   std::size_t free_space_regions_dropped = 0;  // regions of other sources judged static
   std::size_t segmentations_turned = 0;        // CNN runs on a frame turned upright (accelerometer)

@@ -32,10 +32,10 @@ struct DynamicConfig {
   /// by default: the free-space check (free_space) finds the people better (composite mean IoU
   /// 0.64 against 0.48, synthetic walking 0.88-0.89 against 0.79-0.85) but the moved box less
   /// well (recall 0.59-0.77 against 0.70-0.85); docs/dynamics.md, "Free-space check".
-  /// config/ddl_slam_paper.yaml runs the paper's front end.
+  /// config/ddl_slam_paper.yaml turns it on in place of the free-space check.
   bool use_geometry = false;
   int feature_border_px = 8;           // features this close to the mask are not used either
-  bool fallback_without_model = true;  // missing model file: warn and run geometry-only
+  bool fallback_without_model = true;  // missing model file: warn, run the multi-view checks only
   /// Real-time schedule (docs/dynamics.md): the CNN runs on a frame when at least this many
   /// frames passed since its last run; the frames between reuse that mask grown by
   /// segmentation_reuse_dilation_px. 1 = the CNN on every frame; 2 halves its cost for ~0.2 mm
