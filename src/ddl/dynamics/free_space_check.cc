@@ -340,7 +340,7 @@ cv::Mat drop_static_regions(const cv::Mat& mask, const FreeSpaceVotes& votes,
         o[u] = 0;
       } else if (config.carve_static_samples) {
         const int j = std::min(lattice.cols - 1, u / s);
-        if (votes.has_depth.at<std::uint8_t>(i, j) == 0 || !votes.seen_static(i, j)) continue;
+        if (votes.has_depth.at<std::uint8_t>(i, j) == 0 || !votes.clearly_static(i, j)) continue;
         // A pixel of the cell at another depth (a person in front of the wall sample) stays.
         const float z = votes.depth_m.at<float>(v, u);
         const float zs = votes.depth_m.at<float>(lattice.v(i), lattice.u(j));

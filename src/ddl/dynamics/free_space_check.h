@@ -63,8 +63,8 @@ struct FreeSpaceConfig {
   /// and more static votes than masked ones. 1 = keep every region.
   double max_static_region_share = 0.3;
   /// drop_static_regions also clears, inside the regions it keeps, the pixels around each sample
-  /// the keyframes saw as static background whose depth is within tau of the sample's (a CNN
-  /// mask's spill onto the wall beside a person).
+  /// the keyframes saw clearly as static background (FreeSpaceVotes::clearly_static) whose depth
+  /// is within tau of the sample's (a CNN mask's spill onto the wall beside a person).
   bool carve_static_samples = true;
   /// Whether drop_static_regions judges the sparse geometry check's regions too (the CNN's and
   /// the memory's always are, unless max_static_region_share is 1).
@@ -108,6 +108,12 @@ struct FreeSpaceVotes {
   bool seen_static(int i, int j) const {
     return free_votes.at<std::uint8_t>(i, j) == 0 &&
            static_votes.at<std::uint8_t>(i, j) > masked_votes.at<std::uint8_t>(i, j);
+  }
+  /// Stricter, for carving single pixels: no free vote, and over twice as many static votes as
+  /// masked ones.
+  bool clearly_static(int i, int j) const {
+    return free_votes.at<std::uint8_t>(i, j) == 0 &&
+           static_votes.at<std::uint8_t>(i, j) > 2 * masked_votes.at<std::uint8_t>(i, j);
   }
 };
 
