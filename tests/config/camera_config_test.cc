@@ -94,6 +94,12 @@ TEST(CameraConfig, BuiltinCamerasMatchPublishedCalibrations) {
     EXPECT_EQ(c.distortion, e.d);
     EXPECT_EQ(c.depth_factor, 5000.0);  // tum2 included: see the note in tum2.yaml
     EXPECT_EQ(c.fps, 30.0);
+    // Only fr1's depth timing was measured (docs/dynamics.md, "Depth in time").
+    if (std::string(e.name) == "tum1") {
+      EXPECT_EQ(c.depth_time_offset_s, std::optional<double>(-0.020));
+    } else {
+      EXPECT_FALSE(c.depth_time_offset_s.has_value());
+    }
   }
 }
 
@@ -146,6 +152,10 @@ TEST(CameraConfig, LoadsFileAndRoundTripsThroughYaml) {
   EXPECT_EQ(back.cy, odd.cy);
   EXPECT_EQ(back.distortion, odd.distortion);
   EXPECT_EQ(camera_to_yaml(back), camera_to_yaml(odd));
+  EXPECT_FALSE(back.depth_time_offset_s.has_value());  // absent: synchronised
+  odd.depth_time_offset_s = -0.0175;
+  const camera::PinholeCamera timed = parse_camera(camera_to_yaml(odd), "timed.yaml");
+  EXPECT_EQ(timed.depth_time_offset_s, odd.depth_time_offset_s);
 
   // Optional keys: name defaults to the file name, distortion to none, fps to 30.
   dir.write(
@@ -188,6 +198,13 @@ TEST(CameraConfig, InvalidValuesNameFileAndKey) {
   EXPECT_THAT(msg, HasSubstr(dir.file("negative.yaml")));
   EXPECT_THAT(msg, HasSubstr("camera.fx"));
   EXPECT_THAT(msg, HasSubstr("must be a positive focal length (got -500)"));
+
+  dir.write("late.yaml",
+            replaced(kValid, "  fps: 15\n", "  fps: 15\n  depth_time_offset_s: 0.5\n"));
+  msg = error_of<ConfigError>([&] { load_camera(dir.file("late.yaml")); });
+  EXPECT_THAT(msg, HasSubstr(dir.file("late.yaml")));
+  EXPECT_THAT(msg, HasSubstr("camera.depth_time_offset_s"));
+  EXPECT_THAT(msg, HasSubstr("must be in -0.1..0.1 seconds"));
 
   dir.write("text.yaml", replaced(kValid, "fx: 500.0", "fx: abc"));
   EXPECT_EQ(error_of<ConfigError>([&] { load_camera(dir.file("text.yaml")); }),

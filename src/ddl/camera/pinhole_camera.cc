@@ -52,6 +52,11 @@ void PinholeCamera::validate() const {
   require(std::isfinite(depth_factor) && depth_factor >= 0.1 && depth_factor <= 1e6,
           "camera.depth_factor", depth_factor, "must be in 0.1..1e6 (raw units per metre)");
   require(std::isfinite(fps) && fps > 0, "camera.fps", fps, "must be positive");
+  if (depth_time_offset_s) {
+    require(std::isfinite(*depth_time_offset_s) && std::abs(*depth_time_offset_s) <= 0.1,
+            "camera.depth_time_offset_s", *depth_time_offset_s,
+            "must be in -0.1..0.1 seconds (a frame interval or two at most)");
+  }
   if (has_distortion()) {
     // Coefficients no lens has send most of the undistorted image outside the sensor. Each
     // undistorted pixel of a 64 x 48 grid is distorted by OpenCV's model (the one the

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "ddl/core/types.h"
@@ -23,6 +24,11 @@ struct PinholeCamera {
   std::array<double, 5> distortion{0, 0, 0, 0, 0};  // k1 k2 p1 p2 k3 (OpenCV order)
   double depth_factor = 5000.0;                     // raw 16-bit depth value per metre (TUM: 5000)
   double fps = 30.0;                                // nominal frame rate, Hz
+  /// When the sensor captured a depth image, relative to the image's own stamp: nullopt means
+  /// with its colour image (a synchronised sensor, the generator's rooms), whatever the stamps
+  /// say. A value means at the depth stamp plus this offset, seconds; the pipeline then moves the
+  /// depth to the colour image's instant (pipeline::DepthTimeAligner, align_depth_in_time).
+  std::optional<double> depth_time_offset_s;
 
   bool has_distortion() const;
   /// Throws ddl::ConfigError naming the field when a value is out of range.

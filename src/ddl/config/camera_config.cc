@@ -108,6 +108,8 @@ camera::PinholeCamera read_camera(const YamlMap& map, const std::string& default
   map.read("distortion", camera.distortion);
   camera.depth_factor = map.get_double("depth_factor");
   map.read("fps", camera.fps);
+  if (map.has("depth_time_offset_s"))
+    camera.depth_time_offset_s = map.get_double("depth_time_offset_s");
   if (camera.name.empty()) map.fail("name", "must not be empty");
   return camera;
 }
@@ -151,9 +153,11 @@ std::string camera_to_yaml(const camera::PinholeCamera& c) {
       "  cy: {}\n"
       "  distortion: [{}, {}, {}, {}, {}]  # k1 k2 p1 p2 k3\n"
       "  depth_factor: {}\n"
-      "  fps: {}\n",
+      "  fps: {}\n{}",
       quote(c.name), c.width, c.height, c.fx, c.fy, c.cx, c.cy, d[0], d[1], d[2], d[3], d[4],
-      c.depth_factor, c.fps);
+      c.depth_factor, c.fps,
+      c.depth_time_offset_s ? fmt::format("  depth_time_offset_s: {}\n", *c.depth_time_offset_s)
+                            : std::string());
 }
 
 }  // namespace ddl::config

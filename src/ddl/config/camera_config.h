@@ -13,6 +13,8 @@
 //                                 # optional, default no distortion
 //     depth_factor: 5000.0        # required, raw depth units per metre
 //     fps: 30.0                   # optional, default 30
+//     depth_time_offset_s: -0.020 # optional: the depth image was captured at its stamp plus
+//                                 # this (seconds); absent: with its colour image (synchronised)
 //
 // Builtin cameras tum1, tum2, tum3, bonn, synthetic are the files config/cameras/<name>.yaml of
 // the repository. They are found, in this order:

@@ -14,9 +14,11 @@ namespace ddl::io {
 struct RgbdFrame {
   std::size_t index = 0;   // position in the sequence, 0-based
   double timestamp_s = 0;  // RGB timestamp, seconds (TUM: Unix time)
-  cv::Mat rgb;             // CV_8UC3, BGR, undistorted
-  cv::Mat depth_m;         // CV_32FC1, metres along the optical axis, 0 = no measurement
-  std::string rgb_path;    // source files, for messages and outputs
+  /// The depth image's own stamp (TUM: depth.txt), seconds; nullopt: the RGB stamp.
+  std::optional<double> depth_timestamp_s;
+  cv::Mat rgb;           // CV_8UC3, BGR, undistorted
+  cv::Mat depth_m;       // CV_32FC1, metres along the optical axis, 0 = no measurement
+  std::string rgb_path;  // source files, for messages and outputs
   std::string depth_path;
   /// Up (unit vector) in the camera frame from the sequence's accelerometer at this frame's
   /// stamp (io::AccelerometerLog); nullopt without one.

@@ -392,6 +392,7 @@ RgbdFrame TumDataset::frame(std::size_t i) const {
   RgbdFrame frame;
   frame.index = i;
   frame.timestamp_s = pair.rgb_timestamp_s;
+  frame.depth_timestamp_s = pair.depth_timestamp_s;
   frame.rgb_path = pair.rgb_path;
   frame.depth_path = pair.depth_path;
   frame.rgb = undistorter_.undistort_rgb(rgb);

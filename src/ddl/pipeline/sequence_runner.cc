@@ -89,6 +89,7 @@ nlohmann::json statistics_to_json(const SystemStatistics& s) {
           {"keyframes_loaded", s.keyframes_loaded},
           {"map_points_loaded", s.map_points_loaded},
           {"keyframe_depth_images_loaded", s.keyframe_depth_images_loaded},
+          {"depth_images_aligned", s.depth_images_aligned},
           {"keyframes", s.keyframes},
           {"map_points", s.map_points},
           {"loops_closed", s.loops_closed},

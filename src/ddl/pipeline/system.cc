@@ -71,6 +71,7 @@ System::System(const SystemConfig& config, const camera::PinholeCamera& camera,
       std::make_unique<loop::LoopCloser>(loop_config, camera_, map_, vocabulary_, database_);
   dynamic_ = std::make_unique<DynamicFrontEnd>(config_.dynamic, camera_, config_.shared_dir);
   memory_anchor_ = std::make_unique<MapCorrectionFollower>(map_);
+  depth_aligner_ = std::make_unique<DepthTimeAligner>(camera_, config_.align_depth_in_time);
   DenseMapperConfig dense_config = config_.dense;
   dense_config.threaded = config_.mode == RunMode::kThreaded;
   dense_ = std::make_unique<DenseMapper>(dense_config, camera_, map_);
@@ -118,7 +119,7 @@ CnnMask System::segment(const io::RgbdFrame& frame) {
   return dynamic_->cnn_mask(frame);
 }
 
-cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
+cv::Mat System::remove_moving_features(io::RgbdFrame& frame, tracking::Frame& current,
                                        DynamicMasks& masks) {
   const bool use_memory = dynamic_->memory_enabled();
   const bool use_free_space = config_.dynamic.free_space.enabled;
@@ -145,6 +146,20 @@ cv::Mat System::remove_moving_features(const io::RgbdFrame& frame, tracking::Fra
     T_c_w = constant_velocity_pose(frame_changes);
     if (!T_c_w) return {};
     ++stats_.geometry_checks_predicted;
+  }
+  if (depth_aligner_->active()) {
+    // The motion from the previous frame to this one's pose: the depth, captured between the
+    // two or just before (tum1: 20-40 ms before the colour), is interpolated, not extrapolated.
+    const Stopwatch align_watch;
+    const std::optional<SE3> previous = previous_pose(frame_changes);
+    DepthAlignment alignment;
+    frame.depth_m = depth_aligner_->align(
+        frame, previous ? std::optional<SE3>(*T_c_w * previous->inverse()) : std::nullopt,
+        frame.timestamp_s - last_pose_stamp_s_, &alignment);
+    if (alignment.moved) {
+      ++stats_.depth_images_aligned;
+      timings_.record("depth_alignment", align_watch.elapsed_ms());
+    }
   }
   if (config_.dynamic.use_geometry) {
     // Multi-view geometry at the low-cost pose against the reference keyframe and the keyframes
@@ -293,7 +308,7 @@ void System::save_map(const std::string& path) const {
   spdlog::info("{}: sparse map written in {:.0f} ms", path, watch.elapsed_ms());
 }
 
-FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> cnn) {
+FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> cnn) {
   if (finished_) throw Error("System::process called after finish()");
   rethrow_worker_error();
   if (config_.tracking.localization_only && !map_loaded_) {
@@ -305,8 +320,14 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
   FrameOutcome outcome;
   DynamicMasks& masks = outcome.masks;
   cv::Mat cnn_exclusion;
+  if (dynamic_->enabled() && !cnn) cnn = dynamic_->cnn_mask(input);
+  // The frame with its depth at the colour image's instant once the low-cost pose gives the
+  // motion (remove_moving_features; a camera without depth_time_offset_s keeps it as read):
+  // the multi-view checks, the keyframe's view, the memory and the dense map use it; tracking
+  // uses the depth as read (aligning its keypoints' depth with the predicted motion did not
+  // help it: docs/dynamics.md, "Depth in time").
+  io::RgbdFrame frame = input;
   if (dynamic_->enabled()) {
-    if (!cnn) cnn = dynamic_->cnn_mask(frame);
     masks.cnn = std::move(cnn->mask);
     masks.segmentation_ms = cnn->elapsed_ms;
     if (cnn->turned) ++stats_.segmentations_turned;
@@ -329,7 +350,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     timings_.record("lockstep_wait", wait.elapsed_ms());
   }
   // ORB features once per frame, outside the CNN mask; the geometry check drops more of them.
-  tracking::Frame current = tracker_->prepare_frame(frame, cnn_exclusion);
+  tracking::Frame current = tracker_->prepare_frame(input, cnn_exclusion);
   if (dynamic_->enabled()) {
     const cv::Mat geometry_exclusion = remove_moving_features(frame, current, masks);
     dynamic_->finish_masks(masks, cnn_exclusion, geometry_exclusion);
@@ -384,6 +405,7 @@ FrameOutcome System::process(const io::RgbdFrame& frame, std::optional<CnnMask> 
     const bool relocalized = result.state == tracking::TrackingState::kRelocalized;
     velocity_ =
         previous && !relocalized ? std::optional<SE3>(T_c_w * previous->inverse()) : std::nullopt;
+    last_pose_stamp_s_ = frame.timestamp_s;
     last_T_c_w_ = T_c_w;
     last_pose_frame_changes_ = frame_changes;
     last_reference_ = result.reference_keyframe;

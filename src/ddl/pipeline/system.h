@@ -46,6 +46,7 @@
 #include "ddl/map/map_file.h"
 #include "ddl/mapping/local_mapper.h"
 #include "ddl/pipeline/dense_mapper.h"
+#include "ddl/pipeline/depth_time_aligner.h"
 #include "ddl/pipeline/dynamic_front_end.h"
 #include "ddl/pipeline/local_mapping_gate.h"
 #include "ddl/pipeline/map_correction_follower.h"
@@ -69,8 +70,9 @@ struct SystemStatistics {
   std::size_t keyframes_loaded = 0;              // from the map file (load_map)
   std::size_t map_points_loaded = 0;             // ... and its points
   std::size_t keyframe_depth_images_loaded = 0;  // ... and keyframe depth images (geometry check)
-  std::size_t keyframes = 0;                     // alive in the map at the end
-  std::size_t map_points = 0;                    // alive in the map at the end
+  std::size_t depth_images_aligned = 0;  // depth images moved to their colour image's instant
+  std::size_t keyframes = 0;             // alive in the map at the end
+  std::size_t map_points = 0;            // alive in the map at the end
   std::size_t loops_closed = 0;
   std::size_t map_resets = 0;
   std::size_t geometry_checks_low_cost = 0;   // geometry check at the low-cost tracking pose
@@ -159,7 +161,9 @@ class System {
   /// Geometry check and dynamic-memory recall at the low-cost pose of `current` (filling
   /// masks.geometry and masks.memory) and removal of the features in their exclusion mask, which
   /// it returns (empty when neither ran).
-  cv::Mat remove_moving_features(const io::RgbdFrame& frame, tracking::Frame& current,
+  /// Before the checks, `frame`'s depth is moved to its colour image's instant (DepthTimeAligner)
+  /// with the motion from the previous tracked pose to the low-cost one.
+  cv::Mat remove_moving_features(io::RgbdFrame& frame, tracking::Frame& current,
                                  DynamicMasks& masks);
   /// The last tracked pose, if it is in the world frame of `frame_changes`
   /// (Map::frame_change_count): a loop correction or global-BA merge since leaves none.
@@ -183,7 +187,9 @@ class System {
   // Fallback pose of the geometry check: constant-velocity prediction from the last two tracked
   // frames.
   std::optional<SE3> last_T_c_w_;
-  std::optional<SE3> velocity_;                // T_c(k) c(k-1)
+  std::optional<SE3> velocity_;     // T_c(k) c(k-1)
+  double last_pose_stamp_s_ = 0.0;  // stamp of last_T_c_w_'s frame
+  std::unique_ptr<DepthTimeAligner> depth_aligner_;
   std::uint64_t last_pose_frame_changes_ = 0;  // Map::frame_change_count of last_T_c_w_
   map::KeyFramePtr last_reference_;
   // The dynamic memory's world-frame data follows loop corrections and global-BA merges.

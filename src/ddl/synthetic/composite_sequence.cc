@@ -153,15 +153,29 @@ class CompositeSequence final : public SequenceSource {
       throw InputError::at(pair.rgb_path, fmt::format("frame size differs from the camera's {}x{}",
                                                       cam.width, cam.height));
     }
-    const double t = pair.rgb_timestamp_s - t0_;
-    const Vec3d camera_w = f.T_w_c.translation();
-    std::vector<Surface> surfaces;
-    for (std::size_t k = 0; k < tracks_.size(); ++k) {
-      const PersonState state = person_state(tracks_[k], t);
-      f.entities.push_back({static_cast<int>(k) + 1, "person", true, true, state.foot_w});
-      surfaces.push_back(
-          person_billboard(tracks_[k], appearances_[k], state, camera_w, static_cast<int>(k) + 1));
+    // The people as the colour camera saw them (RGB, the truth mask) and as the depth sensor
+    // did: a camera whose depth was captured at another instant (depth_time_offset_s, such as
+    // tum1's) saw them, and the real scene, from another pose and at another moment.
+    const double t_rgb = pair.rgb_timestamp_s;
+    const double t_depth =
+        cam.depth_time_offset_s ? pair.depth_timestamp_s + *cam.depth_time_offset_s : t_rgb;
+    SE3 T_w_depth = f.T_w_c;
+    if (t_depth != t_rgb && !interpolate_pose(groundtruth_, t_depth, T_w_depth)) {
+      T_w_depth = f.T_w_c;  // beyond the ground truth's ends: the colour pose
     }
+    const auto people_at = [&](double stamp_s, const SE3& T_w_c, bool record) {
+      std::vector<Surface> surfaces;
+      for (std::size_t k = 0; k < tracks_.size(); ++k) {
+        const PersonState state = person_state(tracks_[k], stamp_s - t0_);
+        if (record) {
+          f.entities.push_back({static_cast<int>(k) + 1, "person", true, true, state.foot_w});
+        }
+        surfaces.push_back(person_billboard(tracks_[k], appearances_[k], state, T_w_c.translation(),
+                                            static_cast<int>(k) + 1));
+      }
+      return surfaces;
+    };
+    const std::vector<Surface> surfaces = people_at(t_rgb, f.T_w_c, true);
     const PreparedSurfaces prepared(surfaces, scene_.textures, f.T_w_c.inverse());
     RenderBuffers people = renderer_.make_buffers();
     renderer_.rasterize(prepared, 0, surfaces.size(), people);
@@ -171,29 +185,34 @@ class CompositeSequence final : public SequenceSource {
     // from the nearest measured pixel, so the monitor still hides who walks behind it.
     f.background_depth_raw.convertTo(f.background_depth_exact_m, CV_32FC1, 1.0 / cam.depth_factor);
     const cv::Mat surface_m = fill_missing_depth_nearest(f.background_depth_exact_m);
-    f.dynamic_mask = cv::Mat(people.id.size(), CV_8UC1, cv::Scalar(0));
-    f.entity = cv::Mat(people.id.size(), CV_32SC1, cv::Scalar(0));
-    f.depth_exact_m = f.background_depth_exact_m.clone();
-    std::size_t dynamic_pixels = 0;
-    for (int v = 0; v < people.id.rows; ++v) {
-      int* id = people.id.ptr<int>(v);
-      const float* z = people.depth_m.ptr<float>(v);
-      const float* real = surface_m.ptr<float>(v);
-      float* exact = f.depth_exact_m.ptr<float>(v);
-      auto* mask = f.dynamic_mask.ptr<unsigned char>(v);
-      int* ent = f.entity.ptr<int>(v);
-      for (int u = 0; u < people.id.cols; ++u) {
-        if (id[u] < 0) continue;
-        if (real[u] > 0.0f && z[u] >= real[u]) {
-          id[u] = -1;  // hidden behind the real scene
-          continue;
+    // Marks the person pixels of `buffers` nearer than the real surface in `mask` (and the
+    // entity ids); the others become id -1. Returns how many there are.
+    const auto visible_people = [&](RenderBuffers& buffers, const std::vector<Surface>& list,
+                                    cv::Mat& mask, cv::Mat* entity) {
+      mask = cv::Mat(buffers.id.size(), CV_8UC1, cv::Scalar(0));
+      std::size_t count = 0;
+      for (int v = 0; v < buffers.id.rows; ++v) {
+        int* id = buffers.id.ptr<int>(v);
+        const float* z = buffers.depth_m.ptr<float>(v);
+        const float* real = surface_m.ptr<float>(v);
+        auto* m = mask.ptr<unsigned char>(v);
+        for (int u = 0; u < buffers.id.cols; ++u) {
+          if (id[u] < 0) continue;
+          if (real[u] > 0.0f && z[u] >= real[u]) {
+            id[u] = -1;  // hidden behind the real scene
+            continue;
+          }
+          m[u] = 255;
+          if (entity != nullptr) {
+            entity->at<int>(v, u) = list[static_cast<std::size_t>(id[u])].entity;
+          }
+          ++count;
         }
-        mask[u] = 255;
-        ent[u] = surfaces[static_cast<std::size_t>(id[u])].entity;
-        exact[u] = z[u];
-        ++dynamic_pixels;
       }
-    }
+      return count;
+    };
+    f.entity = cv::Mat(people.id.size(), CV_32SC1, cv::Scalar(0));
+    const std::size_t dynamic_pixels = visible_people(people, surfaces, f.dynamic_mask, &f.entity);
     if (!config_.void_boxes_w.empty()) {
       f.void_mask = void_mask_of(surface_m, renderer_, f.T_w_c, config_.void_boxes_w,
                                  config_.void_grow_px, f.dynamic_mask);
@@ -201,18 +220,35 @@ class CompositeSequence final : public SequenceSource {
     f.rgb = f.background_rgb.clone();
     cv::Mat cos_incidence;
     renderer_.shade(prepared, people, 0, f.rgb, cos_incidence);
+
+    // The people the depth sensor saw: the same ones without a depth offset.
+    cv::Mat depth_people_mask = f.dynamic_mask;
+    RenderBuffers depth_people = people;
+    cv::Mat depth_cos = cos_incidence;
+    if (t_depth != t_rgb) {
+      const std::vector<Surface> at_depth = people_at(t_depth, T_w_depth, false);
+      const PreparedSurfaces prepared_depth(at_depth, scene_.textures, T_w_depth.inverse());
+      depth_people = renderer_.make_buffers();
+      renderer_.rasterize(prepared_depth, 0, at_depth.size(), depth_people);
+      visible_people(depth_people, at_depth, depth_people_mask, nullptr);
+      cv::Mat scratch = f.background_rgb.clone();
+      renderer_.shade(prepared_depth, depth_people, 0, scratch, depth_cos);
+    }
+    f.depth_dynamic_mask = depth_people_mask;
+    f.depth_exact_m = f.background_depth_exact_m.clone();
+    depth_people.depth_m.copyTo(f.depth_exact_m, depth_people_mask);
     // Sensor model on the combined depth; only person pixels take the modelled value, the real
     // measurements stay, except where they become the far side of a person's edge (shadow).
     cv::Mat combined_cos(people.id.size(), CV_32FC1, cv::Scalar(1.0f));
-    cos_incidence.copyTo(combined_cos, f.dynamic_mask);
+    depth_cos.copyTo(combined_cos, depth_people_mask);
     const cv::Mat modelled = apply_depth_model(f.depth_exact_m, combined_cos, config_.depth,
                                                cam.depth_factor, config_.seed, index);
     f.depth_raw = f.background_depth_raw.clone();
-    modelled.copyTo(f.depth_raw, f.dynamic_mask);
+    modelled.copyTo(f.depth_raw, depth_people_mask);
     const float jump = static_cast<float>(config_.depth.edge_jump_m);
     for (int v = 0; v < people.id.rows; ++v) {
       auto* out = f.depth_raw.ptr<std::uint16_t>(v);
-      const auto* mask = f.dynamic_mask.ptr<unsigned char>(v);
+      const auto* mask = depth_people_mask.ptr<unsigned char>(v);
       const float* real = f.depth_exact_m.ptr<float>(v);
       for (int u = 0; u < people.id.cols; ++u) {
         if (mask[u] || out[u] == 0) continue;
@@ -221,7 +257,7 @@ class CompositeSequence final : public SequenceSource {
             const int vv = v + dv;
             const int uu = u + du;
             if (vv < 0 || uu < 0 || vv >= people.id.rows || uu >= people.id.cols) continue;
-            if (f.dynamic_mask.at<unsigned char>(vv, uu) &&
+            if (depth_people_mask.at<unsigned char>(vv, uu) &&
                 real[u] - f.depth_exact_m.at<float>(vv, uu) > jump) {
               out[u] = 0;
             }
@@ -263,6 +299,14 @@ class CompositeSequence final : public SequenceSource {
             {"associations", dataset_.association_description()},
             {"world_frame", "the sequence's ground-truth (motion capture) frame; floor z = 0"},
             {"people", people},
+            {"depth_instant",
+             config_.background_camera.depth_time_offset_s
+                 ? "people are drawn into the depth image as the depth sensor saw them: at the "
+                   "depth's capture instant (its stamp plus the camera's depth_time_offset_s), "
+                   "from the ground-truth pose then; into the colour image and dynamic_mask at "
+                   "the colour instant"
+                 : "people are drawn into the depth and colour images at the colour instant "
+                   "(the camera has no depth_time_offset_s)"},
             {"distortion",
              "people are rendered into the distorted images: every pixel's ray is the inverse of "
              "the camera's Brown-Conrady model, so undistorting the frame gives a correct "

@@ -66,6 +66,7 @@ camera::PinholeCamera tum1_camera() {
   c.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
   c.depth_factor = 5000.0;
   c.fps = 30.0;
+  c.depth_time_offset_s = -0.020;  // as config/cameras/tum1.yaml
   return c;
 }
 
@@ -129,16 +130,18 @@ void SequenceConfig::validate() const {
 
 nlohmann::json SequenceConfig::to_json() const {
   auto cam = [](const camera::PinholeCamera& c) {
-    return nlohmann::json{{"name", c.name},
-                          {"width", c.width},
-                          {"height", c.height},
-                          {"fx", c.fx},
-                          {"fy", c.fy},
-                          {"cx", c.cx},
-                          {"cy", c.cy},
-                          {"distortion", c.distortion},
-                          {"depth_factor", c.depth_factor},
-                          {"fps", c.fps}};
+    nlohmann::json j{{"name", c.name},
+                     {"width", c.width},
+                     {"height", c.height},
+                     {"fx", c.fx},
+                     {"fy", c.fy},
+                     {"cx", c.cx},
+                     {"cy", c.cy},
+                     {"distortion", c.distortion},
+                     {"depth_factor", c.depth_factor},
+                     {"fps", c.fps}};
+    if (c.depth_time_offset_s) j["depth_time_offset_s"] = *c.depth_time_offset_s;
+    return j;
   };
   const nlohmann::json depth_model{{"enabled", depth.enabled},
                                    {"min_range_m", depth.min_range_m},

@@ -190,6 +190,7 @@ class RoomSequence final : public SequenceSource {
         }
       }
     }
+    f.depth_dynamic_mask = f.dynamic_mask;  // depth and colour share one instant here
     // The frame is the background except on dynamic pixels, which are shaded and get the same
     // per-pixel noise they would get anyway.
     f.rgb = f.background_rgb.clone();

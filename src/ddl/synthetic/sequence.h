@@ -132,9 +132,13 @@ struct FrameData {
   double rgb_stamp_s = 0.0;
   double depth_stamp_s = 0.0;
   SE3 T_w_c;
-  cv::Mat rgb;             // CV_8UC3 BGR
-  cv::Mat depth_raw;       // CV_16UC1, metres x depth_factor, 0 = no measurement
-  cv::Mat dynamic_mask;    // CV_8UC1, 255 where a dynamic entity is visible
+  cv::Mat rgb;           // CV_8UC3 BGR
+  cv::Mat depth_raw;     // CV_16UC1, metres x depth_factor, 0 = no measurement
+  cv::Mat dynamic_mask;  // CV_8UC1, 255 where a dynamic entity is visible
+  /// CV_8UC1, 255 where a dynamic entity is in the depth image: the composite of a camera with
+  /// depth_time_offset_s draws the people into the depth as the sensor saw them at its capture
+  /// instant; otherwise the same as dynamic_mask.
+  cv::Mat depth_dynamic_mask;
   cv::Mat void_mask;       // CV_8UC1, 255 = not scored (SequenceConfig::void_boxes_w); else empty
   cv::Mat background_rgb;  // CV_8UC3, the frame without dynamic entities
   cv::Mat background_depth_raw;      // CV_16UC1

@@ -49,11 +49,15 @@ std::string camera_yaml(const camera::PinholeCamera& c) {
       "  cy: {}\n"
       "  distortion: [{}, {}, {}, {}, {}]\n"
       "  depth_factor: {}\n"
-      "  fps: {}\n",
+      "  fps: {}\n{}",
       c.name, c.width, c.height, yaml_double(c.fx), yaml_double(c.fy), yaml_double(c.cx),
       yaml_double(c.cy), yaml_double(c.distortion[0]), yaml_double(c.distortion[1]),
       yaml_double(c.distortion[2]), yaml_double(c.distortion[3]), yaml_double(c.distortion[4]),
-      yaml_double(c.depth_factor), yaml_double(c.fps));
+      yaml_double(c.depth_factor), yaml_double(c.fps),
+      c.depth_time_offset_s
+          ? fmt::format("  depth_time_offset_s: {}  # depth captured at its stamp plus this\n",
+                        yaml_double(*c.depth_time_offset_s))
+          : std::string());
 }
 
 /// accelerometer.txt in the TUM format, the readings up to `last_stamp_s` plus a margin wider than
@@ -133,7 +137,9 @@ void write_indices(const SequenceSource& source, const fs::path& out, const List
                         {"background",
                          "the frame rendered without the entities dynamic in it; same sensor "
                          "noise, so RGB equals the frame outside the mask and depth equals it "
-                         "outside the mask dilated by 2 px"},
+                         "outside the mask dilated by 2 px (composite of a camera with "
+                         "depth_time_offset_s: outside the people as the depth sensor saw them, "
+                         "at its capture instant, dilated by 2 px)"},
                         {"entity_positions",
                          "person: feet (billboard bottom centre) in the "
                          "world frame; object: box centre"}}},
