@@ -11,6 +11,7 @@
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 
 #include "ddl/core/error.h"
@@ -47,6 +48,20 @@ int count_outside(const cv::Mat& pixels, const cv::Mat& allowed) {
   cv::Mat outside;
   cv::bitwise_and(pixels, ~allowed, outside);
   return cv::countNonZero(outside);
+}
+
+/// The composite preset on the shared fr1_rpy, with the shared photos of people when
+/// `with_photos`; nullopt when fr1_rpy is not there (`skip_reason` says where it was looked for).
+std::optional<SequenceConfig> fr1_composite(bool with_photos, std::string& skip_reason) {
+  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
+  if (!fs::exists(background + "/groundtruth.txt")) {
+    skip_reason = "TUM fr1_rpy not found at " + background + " (set DDL_SHARED_DIR)";
+    return std::nullopt;
+  }
+  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
+  config.background_dir = background;
+  if (with_photos) config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  return config;
 }
 
 TEST(Sequence, DynamicMaskIsExactlyTheRenderedPeople) {
@@ -245,13 +260,10 @@ TEST(Sequence, GroundTruthPosesAndDepthAgreeAcrossFrames) {
 }
 
 TEST(Sequence, CompositeDrawsPeopleOnlyInFrontOfTheRealScene) {
-  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
-  if (!fs::exists(background + "/groundtruth.txt")) {
-    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
-  }
-  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
-  config.background_dir = background;
-  config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  std::string skip;
+  std::optional<SequenceConfig> found = fr1_composite(true, skip);
+  if (!found) GTEST_SKIP() << skip;
+  SequenceConfig config = *found;
   ASSERT_TRUE(config.background_camera.depth_time_offset_s.has_value());  // tum1's
   const auto source = make_sequence_source(config);
   EXPECT_GT(source->frame_count(), 600u);
@@ -284,13 +296,10 @@ TEST(Sequence, CompositeDrawsPeopleOnlyInFrontOfTheRealScene) {
 // the depth image sit several pixels off those in the colour image, as the real scene does.
 // Without the offset the two silhouettes are one.
 TEST(Sequence, CompositeDrawsThePeopleIntoTheDepthAtTheDepthsInstant) {
-  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
-  if (!fs::exists(background + "/groundtruth.txt")) {
-    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
-  }
-  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
-  config.background_dir = background;
-  config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  std::string skip;
+  std::optional<SequenceConfig> found = fr1_composite(true, skip);
+  if (!found) GTEST_SKIP() << skip;
+  SequenceConfig config = *found;
   config.frames = 420;
   const auto offset_source = make_sequence_source(config);
   config.background_camera.depth_time_offset_s.reset();
@@ -317,12 +326,10 @@ TEST(Sequence, CompositeDrawsThePeopleIntoTheDepthAtTheDepthsInstant) {
 }
 
 TEST(Sequence, CompositeWritesAVoidMaskPerFrame) {
-  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
-  if (!fs::exists(background + "/groundtruth.txt")) {
-    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
-  }
-  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
-  config.background_dir = background;
+  std::string skip;
+  std::optional<SequenceConfig> found = fr1_composite(false, skip);
+  if (!found) GTEST_SKIP() << skip;
+  SequenceConfig config = *found;
   config.frames = 3;
   const TempDir dir("ddl_composite_void");
   write_sequence(*make_sequence_source(config), dir.str());
@@ -332,7 +339,7 @@ TEST(Sequence, CompositeWritesAVoidMaskPerFrame) {
   const io::AccelerometerLog written =
       io::AccelerometerLog::read((dir.path() / "accelerometer.txt").string());
   const io::AccelerometerLog original =
-      io::AccelerometerLog::read(background + "/accelerometer.txt");
+      io::AccelerometerLog::read(config.background_dir + "/accelerometer.txt");
   ASSERT_FALSE(written.empty());
   EXPECT_LT(written.samples().size(), original.samples().size() / 20);
   const double first = io::parse_double(rows.front().fields[0], "void_mask.txt", 1);
@@ -364,17 +371,14 @@ TEST(Sequence, CompositeWritesAVoidMaskPerFrame) {
 // part of the composite's dynamic truth. The preset's void box must cover what the CNN takes for
 // a person on the real frames (outside the drawn people), and only about that.
 TEST(Sequence, CompositeVoidCoversTheRealSeatedMan) {
-  const std::string background = testing::shared_dir() + "/data/tum/rgbd_dataset_freiburg1_rpy";
   const segmentation::SegmenterConfig seg_config;
-  if (!fs::exists(background + "/groundtruth.txt")) {
-    GTEST_SKIP() << "TUM fr1_rpy not found at " << background << " (set DDL_SHARED_DIR)";
-  }
+  std::string skip;
+  std::optional<SequenceConfig> found = fr1_composite(true, skip);
+  if (!found) GTEST_SKIP() << skip;
   if (!fs::exists(fs::path(testing::shared_dir()) / seg_config.model_path)) {
     GTEST_SKIP() << "segmentation model not found in " << testing::shared_dir();
   }
-  SequenceConfig config = find_preset("composite_fr1_rpy_walking").config;
-  config.background_dir = background;
-  config.people_dir = testing::shared_dir() + "/data/people/ccp";
+  SequenceConfig config = *found;
   ASSERT_FALSE(config.void_boxes_w.empty());
   const auto source = make_sequence_source(config);
   const auto segmenter = segmentation::make_segmenter(seg_config, testing::shared_dir());
