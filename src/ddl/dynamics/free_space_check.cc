@@ -73,6 +73,10 @@ void FreeSpaceConfig::validate() const {
   if (!(max_static_per_free >= 0)) fail("max_static_per_free", "must be >= 0");
   if (min_region_px < 0 || min_region_px > 100'000'000)
     fail("min_region_px", "must be in 0..100000000");
+  if (!(grow_step_m >= 0)) fail("grow_step_m", "must be >= 0 (0 = no growth)");
+  if (!(grow_step_quadratic >= 0)) fail("grow_step_quadratic", "must be >= 0");
+  if (!(grow_max_ratio >= 0 && grow_max_ratio <= 1000))
+    fail("grow_max_ratio", "must be in [0, 1000]");
   if (!(max_static_region_share >= 0 && max_static_region_share <= 1))
     fail("max_static_region_share", "must be in [0, 1]");
 }
@@ -213,8 +217,106 @@ FreeSpaceVotes free_space_votes(const cv::Mat& depth_m, const SE3& T_c_w,
   return votes;
 }
 
+namespace {
+
+/// Breadth-first growth of the kept samples (FreeSpaceConfig::grow_step_m): each region in
+/// `labels` grows from its own samples, by at most grow_max_ratio times their count.
+void grow_over_depth(const FreeSpaceVotes& votes, const Lattice& lattice, const cv::Mat& labels,
+                     const std::vector<bool>& keep, const cv::Mat& region_stats,
+                     const FreeSpaceConfig& config, cv::Mat& kept) {
+  const int rows = lattice.rows, cols = lattice.cols;
+  const auto z_at = [&](int i, int j) {
+    return votes.depth_m.at<float>(lattice.v(i), lattice.u(j));
+  };
+  std::vector<int> budget(keep.size(), 0);
+  for (std::size_t r = 1; r < keep.size(); ++r) {
+    if (keep[r]) {
+      budget[r] = static_cast<int>(config.grow_max_ratio *
+                                   region_stats.at<int>(static_cast<int>(r), cv::CC_STAT_AREA));
+    }
+  }
+  // The region each sample belongs to (0 = none); grown samples take their seed's region.
+  cv::Mat owner = cv::Mat::zeros(rows, cols, CV_32S);
+  std::vector<std::pair<int, int>> queue;
+  for (int i = 0; i < rows; ++i) {
+    for (int j = 0; j < cols; ++j) {
+      if (kept.at<std::uint8_t>(i, j) == 0) continue;
+      owner.at<int>(i, j) = labels.at<int>(i, j);
+      queue.emplace_back(i, j);
+    }
+  }
+  constexpr int kDi[4] = {-1, 1, 0, 0}, kDj[4] = {0, 0, -1, 1};
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const auto [i, j] = queue[head];
+    const int r = owner.at<int>(i, j);
+    if (budget[static_cast<std::size_t>(r)] <= 0) continue;
+    const float z = z_at(i, j);
+    const double step = config.grow_step_m + config.grow_step_quadratic * z * z;
+    for (int k = 0; k < 4; ++k) {
+      const int ni = i + kDi[k], nj = j + kDj[k];
+      if (ni < 0 || nj < 0 || ni >= rows || nj >= cols) continue;
+      if (owner.at<int>(ni, nj) != 0 || votes.has_depth.at<std::uint8_t>(ni, nj) == 0) continue;
+      if (votes.static_votes.at<std::uint8_t>(ni, nj) > 0 || std::abs(z_at(ni, nj) - z) >= step)
+        continue;
+      if (budget[static_cast<std::size_t>(r)]-- <= 0) break;
+      owner.at<int>(ni, nj) = r;
+      kept.at<std::uint8_t>(ni, nj) = 1;
+      queue.emplace_back(ni, nj);
+    }
+  }
+}
+
+/// The full-resolution mask of the kept samples (FreeSpaceConfig and free_space_mask's doc).
+cv::Mat lattice_to_pixels(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
+                          const Lattice& lattice, const cv::Mat& kept,
+                          const FreeSpaceConfig& config) {
+  const auto is_kept = [&](int i, int j) {
+    return i >= 0 && j >= 0 && i < lattice.rows && j < lattice.cols &&
+           kept.at<std::uint8_t>(i, j) != 0;
+  };
+  // Each pixel looks at the (up to) four samples around it: it joins when one of them is kept and
+  // its own depth is within tau of that sample's; a pixel without depth takes its nearest sample.
+  // Only the pixels near kept samples can join.
+  const int s = votes.stride;
+  const cv::Rect box = cv::boundingRect(kept);
+  const int v_begin = std::max(0, box.y * s - s),
+            v_end = std::min(depth_m.rows, (box.y + box.height + 1) * s);
+  const int u_begin = std::max(0, box.x * s - s),
+            u_end = std::min(depth_m.cols, (box.x + box.width + 1) * s);
+  cv::Mat mask = cv::Mat::zeros(depth_m.size(), CV_8UC1);
+  for (int v = v_begin; v < v_end; ++v) {
+    const int i0 = (v - s / 2) >= 0 ? (v - s / 2) / s : -1;
+    const int i_near = std::min(lattice.rows - 1, v / s);
+    const float* z_row = depth_m.ptr<float>(v);
+    std::uint8_t* out = mask.ptr<std::uint8_t>(v);
+    for (int u = u_begin; u < u_end; ++u) {
+      const int j0 = (u - s / 2) >= 0 ? (u - s / 2) / s : -1;
+      const float z = z_row[u];
+      if (z <= 0.0f) {
+        if (is_kept(i_near, std::min(lattice.cols - 1, u / s))) out[u] = 255;
+        continue;
+      }
+      for (int di = 0; di < 2 && out[u] == 0; ++di) {
+        for (int dj = 0; dj < 2; ++dj) {
+          const int i = i0 + di, j = j0 + dj;
+          if (!is_kept(i, j)) continue;
+          const float zs = depth_m.at<float>(lattice.v(i), lattice.u(j));
+          if (std::abs(z - zs) < config.threshold_at(zs)) {
+            out[u] = 255;
+            break;
+          }
+        }
+      }
+    }
+  }
+  return mask;
+}
+
+}  // namespace
+
 cv::Mat free_space_mask(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
-                        const FreeSpaceConfig& config, FreeSpaceStats* stats) {
+                        const FreeSpaceConfig& config, FreeSpaceStats* stats, cv::Mat* ungrown) {
+  if (ungrown != nullptr) *ungrown = cv::Mat();
   if (votes.free_votes.empty()) return {};
   check_votes_fit(votes, depth_m.size(), "free_space_mask");
   const Lattice lattice(depth_m, votes.stride);
@@ -258,46 +360,14 @@ cv::Mat free_space_mask(const cv::Mat& depth_m, const FreeSpaceVotes& votes,
       if (keep[static_cast<std::size_t>(labels.at<int>(i, j))]) kept.at<std::uint8_t>(i, j) = 1;
     }
   }
-  const auto is_kept = [&](int i, int j) {
-    return i >= 0 && j >= 0 && i < lattice.rows && j < lattice.cols &&
-           kept.at<std::uint8_t>(i, j) != 0;
-  };
-  // Each pixel looks at the (up to) four samples around it: it joins when one of them is kept and
-  // its own depth is within tau of that sample's; a pixel without depth takes its nearest sample.
-  // Only the pixels near kept samples can join.
-  const int s = votes.stride;
-  const cv::Rect box = cv::boundingRect(kept);
-  const int v_begin = std::max(0, box.y * s - s),
-            v_end = std::min(depth_m.rows, (box.y + box.height + 1) * s);
-  const int u_begin = std::max(0, box.x * s - s),
-            u_end = std::min(depth_m.cols, (box.x + box.width + 1) * s);
-  cv::Mat mask = cv::Mat::zeros(depth_m.size(), CV_8UC1);
-  for (int v = v_begin; v < v_end; ++v) {
-    const int i0 = (v - s / 2) >= 0 ? (v - s / 2) / s : -1;
-    const int i_near = std::min(lattice.rows - 1, v / s);
-    const float* z_row = depth_m.ptr<float>(v);
-    std::uint8_t* out = mask.ptr<std::uint8_t>(v);
-    for (int u = u_begin; u < u_end; ++u) {
-      const int j0 = (u - s / 2) >= 0 ? (u - s / 2) / s : -1;
-      const float z = z_row[u];
-      if (z <= 0.0f) {
-        if (is_kept(i_near, std::min(lattice.cols - 1, u / s))) out[u] = 255;
-        continue;
-      }
-      for (int di = 0; di < 2 && out[u] == 0; ++di) {
-        for (int dj = 0; dj < 2; ++dj) {
-          const int i = i0 + di, j = j0 + dj;
-          if (!is_kept(i, j)) continue;
-          const float zs = depth_m.at<float>(lattice.v(i), lattice.u(j));
-          if (std::abs(z - zs) < config.threshold_at(zs)) {
-            out[u] = 255;
-            break;
-          }
-        }
-      }
-    }
+  if (config.grow_step_m <= 0.0) {
+    cv::Mat mask = lattice_to_pixels(depth_m, votes, lattice, kept, config);
+    if (ungrown != nullptr) *ungrown = mask;
+    return mask;
   }
-  return mask;
+  if (ungrown != nullptr) *ungrown = lattice_to_pixels(depth_m, votes, lattice, kept, config);
+  grow_over_depth(votes, lattice, labels, keep, region_stats, config, kept);
+  return lattice_to_pixels(depth_m, votes, lattice, kept, config);
 }
 
 cv::Mat drop_static_regions(const cv::Mat& mask, const FreeSpaceVotes& votes,

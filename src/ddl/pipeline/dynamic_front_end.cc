@@ -203,11 +203,12 @@ std::vector<dynamics::FreeSpaceView> DynamicFrontEnd::free_space_views(const io:
 cv::Mat DynamicFrontEnd::free_space_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                                          const std::vector<dynamics::FreeSpaceView>& views,
                                          dynamics::FreeSpaceVotes* votes,
-                                         dynamics::FreeSpaceStats* stats) const {
+                                         dynamics::FreeSpaceStats* stats, cv::Mat* ungrown) const {
+  if (ungrown != nullptr) *ungrown = cv::Mat();
   if (!config_.enabled || !config_.free_space.enabled || views.empty()) return {};
   *votes = dynamics::free_space_votes(frame.depth_m, T_c_w, views, camera_, config_.free_space);
   if (stats != nullptr) stats->views = static_cast<int>(views.size());
-  return dynamics::free_space_mask(frame.depth_m, *votes, config_.free_space, stats);
+  return dynamics::free_space_mask(frame.depth_m, *votes, config_.free_space, stats, ungrown);
 }
 
 cv::Mat DynamicFrontEnd::exclusion_mask(const cv::Mat& mask) const {

@@ -43,6 +43,10 @@ struct DynamicMasks {
   cv::Mat geometry;    // CV_8UC1 255 = moved according to the geometry check (may be empty)
   cv::Mat memory;      // CV_8UC1 255 = where a recent CNN detection still is (may be empty)
   cv::Mat free_space;  // CV_8UC1 255 = in space earlier keyframes saw empty (may be empty)
+  /// The free-space regions before their growth over the depth (free_space.grow_step_m; the same
+  /// as free_space without growth): where tracking drops features unless
+  /// free_space.grow_drops_features.
+  cv::Mat free_space_regions;
   /// The union of the four, the regions of the CNN and memory masks (and, with
   /// free_space.judge_geometry, of the geometry mask) that the free-space votes saw as static
   /// left out (empty when all are)
@@ -113,10 +117,12 @@ class DynamicFrontEnd {
                                                         const SE3& T_c_w) const;
 
   /// The free-space mask of the frame at pose T_c_w against `views`; the votes go to `votes`
-  /// (for finish_masks). Empty when the check is off or has no view.
+  /// (for finish_masks), the regions before their growth to `ungrown` (optional). Empty when the
+  /// check is off or has no view.
   cv::Mat free_space_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                           const std::vector<dynamics::FreeSpaceView>& views,
-                          dynamics::FreeSpaceVotes* votes, dynamics::FreeSpaceStats* stats) const;
+                          dynamics::FreeSpaceVotes* votes, dynamics::FreeSpaceStats* stats,
+                          cv::Mat* ungrown = nullptr) const;
 
   /// `mask` grown by feature_border_px: where features are not used (empty stays empty).
   cv::Mat exclusion_mask(const cv::Mat& mask) const;

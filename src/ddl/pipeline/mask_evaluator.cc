@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ddl/core/error.h"
+#include "ddl/core/filesystem.h"
 #include "ddl/io/text_table.h"
 
 namespace ddl::pipeline {
@@ -209,10 +210,16 @@ void MaskEvaluator::add(const io::RgbdFrame& frame, const DynamicMasks& masks) {
     void_pixels_ += static_cast<std::uint64_t>(cv::countNonZero(void_mask));
     cv::compare(void_mask, 0, scored, cv::CMP_EQ);
   }
-  cnn_.add(eval::count_mask_pixels(masks.cnn, truth, scored));
-  geometry_.add(eval::count_mask_pixels(masks.geometry, truth, scored));
-  free_space_.add(eval::count_mask_pixels(masks.free_space, truth, scored));
-  combined_.add(eval::count_mask_pixels(masks.combined, truth, scored));
+  FrameCounts& counts = frames_.emplace_back();
+  counts.stamp_s = frame.timestamp_s;
+  counts.cnn = eval::count_mask_pixels(masks.cnn, truth, scored);
+  counts.geometry = eval::count_mask_pixels(masks.geometry, truth, scored);
+  counts.free_space = eval::count_mask_pixels(masks.free_space, truth, scored);
+  counts.combined = eval::count_mask_pixels(masks.combined, truth, scored);
+  cnn_.add(counts.cnn);
+  geometry_.add(counts.geometry);
+  free_space_.add(counts.free_space);
+  combined_.add(counts.combined);
   if (!moved_object_) return;
   cv::Mat region = moved_object_->region(frame.timestamp_s);
   if (region.empty() || region.size() != truth.size()) return;
@@ -231,6 +238,21 @@ eval::MaskSummary MaskEvaluator::summary(const std::string& source) const {
   if (source == "free_space") return free_space_.summary();
   if (source == "combined") return combined_.summary();
   throw std::invalid_argument("MaskEvaluator::summary: unknown source " + source);
+}
+
+void MaskEvaluator::write_frames_csv(const std::string& path) const {
+  std::string text =
+      "# per-frame mask pixel counts against the ground truth (void pixels excluded)\n"
+      "stamp,truth_px,cnn_tp,cnn_fp,cnn_fn,geometry_tp,geometry_fp,geometry_fn,"
+      "free_space_tp,free_space_fp,free_space_fn,combined_tp,combined_fp,combined_fn\n";
+  for (const FrameCounts& f : frames_) {
+    text += fmt::format("{:.6f},{}", f.stamp_s, f.combined.truth_pixels());
+    for (const eval::MaskCounts* c : {&f.cnn, &f.geometry, &f.free_space, &f.combined}) {
+      text += fmt::format(",{},{},{}", c->true_positive, c->false_positive, c->false_negative);
+    }
+    text += '\n';
+  }
+  write_file_atomically(path, "the per-frame mask scores", text);
 }
 
 nlohmann::json MaskEvaluator::to_json() const {

@@ -83,6 +83,11 @@ class MaskEvaluator {
 
   eval::MaskSummary summary(const std::string& source) const;
 
+  /// Writes the per-frame counts (mask_frames.csv, docs/evaluation.md): a header, then one row per
+  /// scored frame in the order added: stamp, truth_px, and tp,fp,fn per source (cnn, geometry,
+  /// free_space, combined). Throws ddl::OutputError naming the file when it cannot be written.
+  void write_frames_csv(const std::string& path) const;
+
  private:
   MaskEvaluator(std::string sequence_dir, const camera::PinholeCamera& stored_camera);
   /// The mask `file` (relative to the sequence), undistorted like the frames.
@@ -98,6 +103,11 @@ class MaskEvaluator {
   eval::MaskAccumulator cnn_, geometry_, free_space_, combined_;
   eval::MaskCounts object_cnn_, object_geometry_, object_free_space_, object_combined_;
   std::size_t object_frames_ = 0;
+  struct FrameCounts {
+    double stamp_s = 0.0;
+    eval::MaskCounts cnn, geometry, free_space, combined;
+  };
+  std::vector<FrameCounts> frames_;  // per scored frame, in the order added
 };
 
 }  // namespace ddl::pipeline

@@ -306,7 +306,12 @@ RunOutcome run_sequence(const io::DatasetReader& dataset, System& system, const 
   for (const std::string& f : map_files) {
     summary["outputs"]["map"].push_back(fs::path(f).filename().string());
   }
-  if (masks != nullptr) summary["masks"] = masks->to_json();
+  if (masks != nullptr) {
+    summary["masks"] = masks->to_json();
+    if (write_output([&] { masks->write_frames_csv((out_dir / "mask_frames.csv").string()); })) {
+      summary["outputs"]["mask_frames"] = "mask_frames.csv";
+    }
+  }
   if (camera_written) summary["outputs"]["camera_trajectory"] = camera_path.filename().string();
   // Not under "outputs", which lists the files of the output folder (removed by the next run in
   // it): the map may lie anywhere, and may be the one this run loaded.

@@ -205,8 +205,9 @@ cv::Mat System::remove_moving_features(io::RgbdFrame& frame, tracking::Frame& cu
       ++stats_.free_space_checks_skipped;
       views.clear();  // the poses may be in two world frames: no free-space mask for this frame
     }
-    masks.free_space = dynamic_->free_space_mask(frame, *T_c_w, views, &masks.free_space_votes,
-                                                 &masks.free_space_stats);
+    masks.free_space =
+        dynamic_->free_space_mask(frame, *T_c_w, views, &masks.free_space_votes,
+                                  &masks.free_space_stats, &masks.free_space_regions);
     const dynamics::FreeSpaceStats& f = masks.free_space_stats;
     spdlog::debug("frame {}: free-space check: {} views, {} samples, {} dynamic, {} regions",
                   frame.index, f.views, f.samples, f.samples_dynamic, f.regions);
@@ -230,7 +231,11 @@ cv::Mat System::remove_moving_features(io::RgbdFrame& frame, tracking::Frame& cu
   cv::Mat moved = masks.geometry;
   if (config_.dynamic.memory.drop_features) moved = dynamics::combine_masks(moved, masks.memory);
   if (config_.dynamic.free_space.drop_features) {
-    moved = dynamics::combine_masks(moved, masks.free_space);
+    // The grown parts only with grow_drops_features: a growth that leaked onto the desk would
+    // take the features a fast rotation needs (the composite lost track on fr1_rpy's fast part).
+    moved = dynamics::combine_masks(moved, config_.dynamic.free_space.grow_drops_features
+                                               ? masks.free_space
+                                               : masks.free_space_regions);
   }
   cv::Mat exclusion = dynamic_->exclusion_mask(moved);
   const Stopwatch drop_watch;
@@ -388,6 +393,7 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
       masks.geometry.release();
       masks.memory.release();
       masks.free_space.release();
+      masks.free_space_regions.release();
       masks.free_space_votes = {};
       dynamic_->finish_masks(masks, cnn_exclusion, cv::Mat());
     }
