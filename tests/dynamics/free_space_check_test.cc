@@ -66,16 +66,23 @@ TEST(FreeSpaceCheck, FindsTheWalkersInSpaceEarlierKeyframesSawEmpty) {
   const synthetic::FrameData f = scene.frame(400);
   ASSERT_GT(cv::countNonZero(f.dynamic_mask), 5000);
   FreeSpaceStats stats;
-  const cv::Mat mask = check(scene, f, views, f.T_w_c.inverse(), config, nullptr, &stats);
+  FreeSpaceConfig ungrown_config = config;
+  ungrown_config.grow_step_m = 0.0;  // the free votes' regions alone
+  const cv::Mat mask = check(scene, f, views, f.T_w_c.inverse(), ungrown_config, nullptr, &stats);
   const MaskScore s = score_mask(mask, f.dynamic_mask);
-  // Measured: IoU 0.82, precision 0.82, recall 0.99 (before the growth over the depth, stop 36:
-  // IoU 0.84, precision 0.99, recall 0.84; the growth reaches the legs and spreads onto the
-  // floor at the bottom border, which no keyframe saw).
+  // Measured: IoU 0.84, precision 0.99, recall 0.84.
   EXPECT_GT(s.iou, 0.75) << "precision " << s.precision << " recall " << s.recall;
-  EXPECT_GT(s.precision, 0.75) << "iou " << s.iou << " recall " << s.recall;
-  EXPECT_GT(s.recall, 0.9) << "iou " << s.iou << " precision " << s.precision;
+  EXPECT_GT(s.precision, 0.9);
   EXPECT_GE(stats.regions, 1);
   EXPECT_GT(stats.samples, 10000);
+  // Grown over the depth (the default since stop 36): measured IoU 0.82, precision 0.82, recall
+  // 0.99; the growth reaches the legs and spreads onto the floor at the bottom border, which no
+  // keyframe saw.
+  const cv::Mat grown = check(scene, f, views, f.T_w_c.inverse(), config);
+  const MaskScore g = score_mask(grown, f.dynamic_mask);
+  EXPECT_GT(g.iou, 0.75) << "precision " << g.precision << " recall " << g.recall;
+  EXPECT_GT(g.recall, 0.95) << "iou " << g.iou << " precision " << g.precision;
+  EXPECT_GT(g.precision, 0.75) << "iou " << g.iou << " recall " << g.recall;
 }
 
 TEST(FreeSpaceCheck, AStaticRoomGivesNoMaskEvenWithAPoseError) {
@@ -353,6 +360,18 @@ TEST(FreeSpaceCheck, ConfigErrorsNameTheKey) {
   config.max_static_region_share = 1.5;
   EXPECT_TRUE(test_support::throws_config_error_for_key(
       [&] { config.validate(); }, "dynamic.free_space.max_static_region_share"));
+  config = {};
+  config.grow_step_m = -0.1;
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.free_space.grow_step_m"));
+  config = {};
+  config.grow_step_quadratic = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.free_space.grow_step_quadratic"));
+  config = {};
+  config.grow_max_ratio = 1e6;
+  EXPECT_TRUE(test_support::throws_config_error_for_key([&] { config.validate(); },
+                                                        "dynamic.free_space.grow_max_ratio"));
 }
 
 }  // namespace
