@@ -66,6 +66,31 @@ TEST(FrameTest, InvalidDepthReadingsAreIgnored) {
   EXPECT_EQ(keypoint_depth(depth, 3.6f, 3.0f, g), 0.0f);   // rounds to x = 4: outside
 }
 
+TEST(FrameTest, KeypointsNearADepthEdgeGetNoDepthWhenTheFilterIsOn) {
+  FrameConfig config;
+  const FrameGeometry off = FrameGeometry::from(test_camera(), config);
+  config.depth_edge_radius_px = 2;
+  config.depth_edge_ratio = 0.1;
+  const FrameGeometry on = FrameGeometry::from(test_camera(), config);
+  // A person at 1 m in front of a wall at 3 m: columns 0..9 person, 10..19 wall.
+  cv::Mat depth(20, 20, CV_32F, cv::Scalar(3.0f));
+  depth(cv::Rect(0, 0, 10, 20)).setTo(1.0f);
+  depth.at<float>(5, 15) = 3.2f;   // a 6.7% step on the wall: not an edge at ratio 0.1
+  depth.at<float>(15, 16) = 0.0f;  // a hole is not an edge
+  EXPECT_EQ(keypoint_depth(depth, 9.0f, 10.0f, off), 1.0f);
+  EXPECT_EQ(keypoint_depth(depth, 9.0f, 10.0f, on), 0.0f);   // the wall is 1 px away
+  EXPECT_EQ(keypoint_depth(depth, 11.0f, 10.0f, on), 0.0f);  // the person is 2 px away
+  EXPECT_EQ(keypoint_depth(depth, 12.0f, 10.0f, on), 3.0f);  // 3 px: outside the window
+  EXPECT_EQ(keypoint_depth(depth, 7.0f, 10.0f, on), 1.0f);
+  EXPECT_EQ(keypoint_depth(depth, 15.0f, 6.0f, on), 3.0f);   // the small step is kept
+  EXPECT_EQ(keypoint_depth(depth, 16.0f, 14.0f, on), 3.0f);  // next to the hole
+  EXPECT_EQ(keypoint_depth(depth, 0.0f, 0.0f, on), 1.0f);    // the window is clamped to the image
+  EXPECT_EQ(keypoint_depth(depth, 19.0f, 19.0f, on), 3.0f);
+  config.depth_edge_ratio = 0.05;
+  const FrameGeometry strict = FrameGeometry::from(test_camera(), config);
+  EXPECT_EQ(keypoint_depth(depth, 15.0f, 6.0f, strict), 0.0f);
+}
+
 TEST(FrameTest, DynamicMaskExcludesFeatures) {
   const TrackerConfig config = testing::test_tracker_config();
   FrameBuilder builder(test_camera(), config.orb, config.frame);

@@ -56,6 +56,16 @@ TEST(TrackerConfigTest, ErrorsNameTheKey) {
   c = TrackerConfig{};
   c.motion_prior.sigma_rotation_deg = std::nan("");
   EXPECT_TRUE(rejects(c, "tracking.motion_prior.sigma_rotation_deg"));
+  c = TrackerConfig{};
+  c.frame.depth_edge_radius_px = -1;
+  EXPECT_TRUE(rejects(c, "tracking.frame.depth_edge_radius_px"));
+  c.frame.depth_edge_radius_px = 33;
+  EXPECT_TRUE(rejects(c, "tracking.frame.depth_edge_radius_px"));
+  c = TrackerConfig{};
+  c.frame.depth_edge_ratio = 0.0;
+  EXPECT_TRUE(rejects(c, "tracking.frame.depth_edge_ratio"));
+  c.frame.depth_edge_ratio = std::nan("");
+  EXPECT_TRUE(rejects(c, "tracking.frame.depth_edge_ratio"));
 }
 
 }  // namespace

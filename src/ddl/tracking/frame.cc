@@ -25,6 +25,8 @@ FrameGeometry FrameGeometry::from(const camera::PinholeCamera& camera, const Fra
   g.close_depth_m = config.close_depth_baselines * g.baseline_m;
   g.min_depth_m = config.min_depth_m;
   g.max_depth_m = config.max_depth_m;
+  g.depth_edge_radius_px = config.depth_edge_radius_px;
+  g.depth_edge_ratio = config.depth_edge_ratio;
   return g;
 }
 
@@ -129,6 +131,21 @@ float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeomet
   if (x < 0 || y < 0 || x >= depth_m.cols || y >= depth_m.rows) return 0.0f;
   const float d = depth_m.at<float>(y, x);
   if (!std::isfinite(d) || d <= geometry.min_depth_m || d > geometry.max_depth_m) return 0.0f;
+  const int r = geometry.depth_edge_radius_px;
+  if (r > 0) {
+    // At a depth edge the reading may belong to either side: a corner on a silhouette, or a
+    // sensor whose depth image lags the colour one (Freiburg 1: 20 ms) in a fast turn.
+    const float jump = static_cast<float>(geometry.depth_edge_ratio) * d;
+    const int y0 = std::max(0, y - r), y1 = std::min(depth_m.rows - 1, y + r);
+    const int x0 = std::max(0, x - r), x1 = std::min(depth_m.cols - 1, x + r);
+    for (int yy = y0; yy <= y1; ++yy) {
+      const float* row = depth_m.ptr<float>(yy);
+      for (int xx = x0; xx <= x1; ++xx) {
+        const float e = row[xx];
+        if (std::isfinite(e) && e > geometry.min_depth_m && std::abs(e - d) > jump) return 0.0f;
+      }
+    }
+  }
   return d;
 }
 

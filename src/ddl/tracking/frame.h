@@ -38,6 +38,8 @@ struct FrameGeometry {
   double close_depth_m = 0.0;  // ORB-SLAM2 ThDepth: depth below which a point is "close"
   double min_depth_m = 0.0;    // valid depth range (exclusive min, inclusive max)
   double max_depth_m = 0.0;
+  int depth_edge_radius_px = 0;   // keypoints this close to a depth edge get no depth (0 = off)
+  double depth_edge_ratio = 0.0;  // an edge: a reading off the keypoint's by this share of it
 
   /// Undistorted geometry of `camera` (its distortion is ignored: images arrive undistorted).
   static FrameGeometry from(const camera::PinholeCamera& camera, const FrameConfig& config);
@@ -163,7 +165,8 @@ class FrameBuilder {
 };
 
 /// The depth used for keypoint (u, v): the reading at the nearest pixel, or 0 when it is outside
-/// the valid range (or the pixel outside the image).
+/// the valid range (or the pixel outside the image), or when depth_edge_radius_px > 0 and a valid
+/// reading within that many pixels differs from it by more than depth_edge_ratio of it.
 float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeometry& geometry);
 
 }  // namespace ddl::tracking

@@ -35,6 +35,9 @@ void validate_frame(const FrameConfig& c) {
           "must be >= 0");
   require(std::isfinite(c.max_depth_m) && c.max_depth_m > c.min_depth_m, p + "max_depth_m",
           c.max_depth_m, "must be greater than tracking.frame.min_depth_m");
+  require_count(c.depth_edge_radius_px, 0, 32, p + "depth_edge_radius_px");
+  require(std::isfinite(c.depth_edge_ratio) && c.depth_edge_ratio > 0.0, p + "depth_edge_ratio",
+          c.depth_edge_ratio, "must be > 0");
   require_count(c.bow_levels_up, 0, 10, p + "bow_levels_up");
 }
 
