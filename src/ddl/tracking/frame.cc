@@ -142,7 +142,9 @@ float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeomet
       const float* row = depth_m.ptr<float>(yy);
       for (int xx = x0; xx <= x1; ++xx) {
         const float e = row[xx];
-        if (std::isfinite(e) && e > geometry.min_depth_m && std::abs(e - d) > jump) return 0.0f;
+        const bool valid =
+            std::isfinite(e) && e > geometry.min_depth_m && e <= geometry.max_depth_m;
+        if (valid && std::abs(e - d) > jump) return 0.0f;
       }
     }
   }

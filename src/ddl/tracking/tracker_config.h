@@ -15,8 +15,9 @@ struct FrameConfig {
   double close_depth_baselines = 40.0;  // "close" points: depth < this * bf / fx (ThDepth)
   double min_depth_m = 0.1;             // depth readings at or below this are ignored [m]
   double max_depth_m = 10.0;            // depth readings above this are ignored [m]
-  int depth_edge_radius_px = 0;   // a keypoint within this many pixels of a depth edge gets no
-                                  // depth (monocular): its reading may be either side's (0 = off)
+  int depth_edge_radius_px = 2;   // a keypoint within this many pixels of a depth edge gets no
+                                  // depth (monocular): its reading may be either side's (0 = off;
+                                  // docs/tracking.md, "Keypoints on depth edges")
   double depth_edge_ratio = 0.1;  // a depth edge: a reading in the keypoint's window that differs
                                   // from its own by more than this fraction of its depth
   int bow_levels_up = 3;  // direct index nodes this many levels above the words (depth 2 of the
