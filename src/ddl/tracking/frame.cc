@@ -129,8 +129,11 @@ float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeomet
   const int x = nearest_pixel(u);
   const int y = nearest_pixel(v);
   if (x < 0 || y < 0 || x >= depth_m.cols || y >= depth_m.rows) return 0.0f;
+  const auto valid = [&](float z) {
+    return std::isfinite(z) && z > geometry.min_depth_m && z <= geometry.max_depth_m;
+  };
   const float d = depth_m.at<float>(y, x);
-  if (!std::isfinite(d) || d <= geometry.min_depth_m || d > geometry.max_depth_m) return 0.0f;
+  if (!valid(d)) return 0.0f;
   const int r = geometry.depth_edge_radius_px;
   if (r > 0) {
     // At a depth edge the reading may belong to either side: a corner on a silhouette, or a
@@ -141,10 +144,7 @@ float keypoint_depth(const cv::Mat& depth_m, float u, float v, const FrameGeomet
     for (int yy = y0; yy <= y1; ++yy) {
       const float* row = depth_m.ptr<float>(yy);
       for (int xx = x0; xx <= x1; ++xx) {
-        const float e = row[xx];
-        const bool valid =
-            std::isfinite(e) && e > geometry.min_depth_m && e <= geometry.max_depth_m;
-        if (valid && std::abs(e - d) > jump) return 0.0f;
+        if (valid(row[xx]) && std::abs(row[xx] - d) > jump) return 0.0f;
       }
     }
   }
