@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/pipeline/system.h"
 #include "pipeline_test_support.h"
@@ -79,6 +81,50 @@ TEST(FreeSpaceSystem, APersonSittingStillStaysInTheCombinedMask) {
   // Measured: 0.81 (the frames the CNN misses hold only what the free space finds); the judged
   // mask as the views' mask gave 0.50.
   EXPECT_GT(iou, 0.7);
+}
+
+/// Pixels of the memory mask outside the truth, summed over the frames from `first_scored` on,
+/// of syn_walking_rpy with a CNN that adds a false detection (`band`) to the truth from frame
+/// `first_scored - 30` on.
+std::int64_t memory_false_positives(bool remember_judged, const cv::Rect& band, int frames,
+                                    int first_scored) {
+  const auto vocabulary = default_vocabulary();
+  const auto source =
+      synthetic::make_sequence_source(testing::preset_config("syn_walking_rpy", frames));
+  const camera::PinholeCamera& camera = source->camera();
+  SystemConfig config = free_space_config();
+  config.dynamic.memory.remember_judged = remember_judged;
+  EXPECT_TRUE(config.dynamic.memory.enabled);
+  System system(config, camera, vocabulary);
+  std::int64_t false_positives = 0;
+  for (int i = 0; i < frames; ++i) {
+    const synthetic::FrameData data = source->render_frame(static_cast<std::size_t>(i));
+    CnnMask cnn;
+    cnn.mask = data.dynamic_mask.clone();
+    if (i >= first_scored - 30) cnn.mask(band).setTo(255);
+    const FrameOutcome outcome = system.process(testing::to_rgbd(data, camera), cnn);
+    EXPECT_TRUE(outcome.tracking.tracked()) << "frame " << i;
+    if (i < first_scored || outcome.masks.memory.empty()) continue;
+    cv::Mat outside;
+    cv::bitwise_and(outcome.masks.memory, ~data.dynamic_mask, outside);
+    false_positives += cv::countNonZero(outside);
+  }
+  system.finish();
+  return false_positives;
+}
+
+TEST(FreeSpaceSystem, AFalseDetectionTheVotesRejectIsNotRemembered) {
+  if (!default_vocabulary()) GTEST_SKIP() << "vocab/ddl_orb_k10_l5.dvoc is absent";
+  // A CNN that, from frame 120 on, also marks a band of the static room at the image's left
+  // border (where the memory recalls): the keyframes from before saw that room unmasked, so the
+  // free-space votes drop the band from the combined mask. Remembered as the network gave it,
+  // the band comes back through the memory in the following frames; remembered as judged, not.
+  const cv::Rect band(0, 180, 48, 120);  // 5760 px
+  const std::int64_t whole = memory_false_positives(false, band, 240, 150);
+  const std::int64_t judged = memory_false_positives(true, band, 240, 150);
+  // Measured over frames 150-239: 546581 px (about the whole band on every frame) and 3581 px.
+  EXPECT_GT(whole, 200000);
+  EXPECT_LT(judged, whole / 20);
 }
 
 }  // namespace

@@ -62,6 +62,11 @@ struct DynamicMemoryConfig {
   /// and depth do not remove and which would otherwise be re-marked for max_age_frames. 0 = no
   /// veto.
   int static_views = 5;
+  /// Whether the memory remembers the CNN mask as the free-space votes judged it (its regions
+  /// that the keyframes saw as static surface left out, as in the combined mask) rather than the
+  /// network's whole mask: a false detection the votes reject is then not carried on for
+  /// max_age_frames (composite combined IoU +0.006 over four starts; docs/dynamics.md).
+  bool remember_judged = true;
 
   double tolerance_at(double z) const {
     return depth_tolerance_m + depth_tolerance_quadratic * z * z;

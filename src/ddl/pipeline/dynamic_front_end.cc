@@ -246,8 +246,9 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclu
   masks.free_space_stats.regions_dropped = 0;  // of this call (a relocalized frame calls twice)
   masks.flagged = dynamics::combine_masks(dynamics::combine_masks(masks.cnn, masks.geometry),
                                           dynamics::combine_masks(masks.memory, masks.free_space));
+  masks.cnn_kept = judged(masks.cnn, true);
   masks.combined = dynamics::combine_masks(
-      dynamics::combine_masks(judged(masks.cnn, true), judged(masks.geometry, f.judge_geometry)),
+      dynamics::combine_masks(masks.cnn_kept, judged(masks.geometry, f.judge_geometry)),
       dynamics::combine_masks(judged(masks.memory, true), masks.free_space));
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }

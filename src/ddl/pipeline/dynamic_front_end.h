@@ -47,6 +47,9 @@ struct DynamicMasks {
   /// as free_space without growth): where tracking drops features unless
   /// free_space.grow_drops_features.
   cv::Mat free_space_regions;
+  /// cnn with the regions the free-space votes saw as static left out (cnn itself when the check
+  /// did not run): the CNN's part of the combined mask
+  cv::Mat cnn_kept;
   /// The union of the four, the regions of the CNN and memory masks (and, with
   /// free_space.judge_geometry, of the geometry mask) that the free-space votes saw as static
   /// left out (empty when all are)
