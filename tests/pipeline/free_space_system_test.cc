@@ -15,28 +15,39 @@ namespace {
 using testing::core_config;
 using testing::default_vocabulary;
 
-/// Mean IoU of `mask_of(outcome)` against the truth over the frames from `first_scored` on whose
-/// truth has pixels. `cnn(i, truth)`, when given, is the CNN mask handed to frame i.
-template <typename MaskOf, typename Cnn>
-double run_and_score(const std::string& preset, int frames, int first_scored,
-                     const SystemConfig& config, MaskOf mask_of, Cnn cnn) {
+/// Runs `frames` frames of `preset` through a System with `config`, handing frame i the CNN mask
+/// `cnn(i, truth)`; every frame must be tracked. `visit(i, truth, outcome)` sees each outcome.
+template <typename Cnn, typename Visit>
+void run_system(const std::string& preset, int frames, const SystemConfig& config, Cnn cnn,
+                Visit visit) {
   const auto vocabulary = default_vocabulary();
   const auto source = synthetic::make_sequence_source(testing::preset_config(preset, frames));
   const camera::PinholeCamera& camera = source->camera();
   System system(config, camera, vocabulary);
-  double iou_sum = 0.0;
-  int scored = 0;
   for (int i = 0; i < frames; ++i) {
     const synthetic::FrameData data = source->render_frame(static_cast<std::size_t>(i));
     const FrameOutcome outcome =
         system.process(testing::to_rgbd(data, camera), cnn(i, data.dynamic_mask));
     EXPECT_TRUE(outcome.tracking.tracked()) << "frame " << i;
-    if (i < first_scored || cv::countNonZero(data.dynamic_mask) == 0) continue;
-    const cv::Mat mask = mask_of(outcome);
-    iou_sum += mask.empty() ? 0.0 : dynamics::score_mask(mask, data.dynamic_mask).iou;
-    ++scored;
+    visit(i, data.dynamic_mask, outcome);
   }
   system.finish();
+}
+
+/// Mean IoU of `mask_of(outcome)` against the truth over the frames from `first_scored` on whose
+/// truth has pixels. `cnn(i, truth)` is the CNN mask handed to frame i.
+template <typename MaskOf, typename Cnn>
+double run_and_score(const std::string& preset, int frames, int first_scored,
+                     const SystemConfig& config, MaskOf mask_of, Cnn cnn) {
+  double iou_sum = 0.0;
+  int scored = 0;
+  run_system(preset, frames, config, cnn,
+             [&](int i, const cv::Mat& truth, const FrameOutcome& outcome) {
+               if (i < first_scored || cv::countNonZero(truth) == 0) return;
+               const cv::Mat mask = mask_of(outcome);
+               iou_sum += mask.empty() ? 0.0 : dynamics::score_mask(mask, truth).iou;
+               ++scored;
+             });
   return scored > 0 ? iou_sum / scored : 0.0;
 }
 
@@ -88,28 +99,23 @@ TEST(FreeSpaceSystem, APersonSittingStillStaysInTheCombinedMask) {
 /// `first_scored - 30` on.
 std::int64_t memory_false_positives(bool remember_judged, const cv::Rect& band, int frames,
                                     int first_scored) {
-  const auto vocabulary = default_vocabulary();
-  const auto source =
-      synthetic::make_sequence_source(testing::preset_config("syn_walking_rpy", frames));
-  const camera::PinholeCamera& camera = source->camera();
   SystemConfig config = free_space_config();
   config.dynamic.memory.remember_judged = remember_judged;
   EXPECT_TRUE(config.dynamic.memory.enabled);
-  System system(config, camera, vocabulary);
+  const auto cnn = [&](int i, const cv::Mat& truth) {
+    CnnMask m;
+    m.mask = truth.clone();
+    if (i >= first_scored - 30) m.mask(band).setTo(255);
+    return std::optional<CnnMask>(m);
+  };
   std::int64_t false_positives = 0;
-  for (int i = 0; i < frames; ++i) {
-    const synthetic::FrameData data = source->render_frame(static_cast<std::size_t>(i));
-    CnnMask cnn;
-    cnn.mask = data.dynamic_mask.clone();
-    if (i >= first_scored - 30) cnn.mask(band).setTo(255);
-    const FrameOutcome outcome = system.process(testing::to_rgbd(data, camera), cnn);
-    EXPECT_TRUE(outcome.tracking.tracked()) << "frame " << i;
-    if (i < first_scored || outcome.masks.memory.empty()) continue;
-    cv::Mat outside;
-    cv::bitwise_and(outcome.masks.memory, ~data.dynamic_mask, outside);
-    false_positives += cv::countNonZero(outside);
-  }
-  system.finish();
+  run_system("syn_walking_rpy", frames, config, cnn,
+             [&](int i, const cv::Mat& truth, const FrameOutcome& outcome) {
+               if (i < first_scored || outcome.masks.memory.empty()) return;
+               cv::Mat outside;
+               cv::bitwise_and(outcome.masks.memory, ~truth, outside);
+               false_positives += cv::countNonZero(outside);
+             });
   return false_positives;
 }
 

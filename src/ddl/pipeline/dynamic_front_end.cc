@@ -226,9 +226,10 @@ cv::Mat DynamicFrontEnd::memory_mask(const io::RgbdFrame& frame, const SE3& T_c_
 }
 
 void DynamicFrontEnd::remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c,
-                                        const CnnMask& cnn) {
-  if (!memory_enabled() || cnn.reused || cnn.mask.empty()) return;
-  memory_.remember(frame.index, T_w_c, cnn.mask, frame.depth_m, frame.rgb);
+                                        const DynamicMasks& masks, bool reused) {
+  const cv::Mat& mask = config_.memory.remember_judged ? masks.cnn_kept : masks.cnn;
+  if (!memory_enabled() || reused || mask.empty()) return;
+  memory_.remember(frame.index, T_w_c, mask, frame.depth_m, frame.rgb);
 }
 
 void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,

@@ -138,8 +138,10 @@ class DynamicFrontEnd {
   cv::Mat memory_mask(const io::RgbdFrame& frame, const SE3& T_c_w,
                       dynamics::DynamicMemoryStats* stats);
 
-  /// Remembers the frame's CNN mask at its tracked pose T_w_c; reused masks are not remembered.
-  void remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c, const CnnMask& cnn);
+  /// Remembers the frame's CNN mask (masks.cnn_kept with memory.remember_judged, else masks.cnn)
+  /// at its tracked pose T_w_c; a reused mask is not remembered.
+  void remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T_w_c, const DynamicMasks& masks,
+                         bool reused);
 
   /// Moves the remembered detections with a loop correction or global-BA merge (T_w_new_w_old,
   /// from MapCorrectionFollower).

@@ -420,9 +420,7 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
         dynamic_->move_dynamic_surfaces(*T_new_old);
       }
       if (memory_anchor_->anchor(result.reference_keyframe, frame_changes)) {
-        const cv::Mat& remembered =
-            config_.dynamic.memory.remember_judged ? masks.cnn_kept : masks.cnn;
-        dynamic_->remember_cnn_mask(frame, *result.T_w_c, {remembered, 0.0, cnn->reused});
+        dynamic_->remember_cnn_mask(frame, *result.T_w_c, masks, cnn->reused);
       }
     }
   } else {
