@@ -1,6 +1,6 @@
 # Every dependency comes from Debian 12 packages (scripts/install-deps.sh). Nothing is downloaded.
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
-find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs highgui videoio calib3d features2d dnn)
+find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs highgui videoio calib3d features2d dnn ximgproc)
 find_package(Ceres 2 REQUIRED)
 find_package(octomap REQUIRED)
 find_package(TBB REQUIRED)

@@ -31,6 +31,7 @@ HEADERS = [
     ("src/ddl/dynamics/dynamic_memory.h", "dynamics", ["DynamicMemoryConfig"]),
     ("src/ddl/dynamics/free_space_check.h", "dynamics", ["FreeSpaceConfig"]),
     ("src/ddl/dynamics/mask_depth_trim.h", "dynamics", ["DepthTrimConfig"]),
+    ("src/ddl/dynamics/mask_edge_refinement.h", "dynamics", ["EdgeRefinementConfig"]),
     ("src/ddl/dynamics/picture_veto.h", "dynamics", ["PictureVetoConfig"]),
     ("src/ddl/inpainting/background_inpainter.h", "inpainting", ["InpaintingConfig"]),
     ("src/ddl/octomap/octree_map.h", "octomap", ["OctreeConfig"]),

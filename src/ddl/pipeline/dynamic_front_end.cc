@@ -7,6 +7,7 @@
 #include "ddl/core/error.h"
 #include "ddl/core/timing.h"
 #include "ddl/dynamics/mask_depth_trim.h"
+#include "ddl/dynamics/mask_edge_refinement.h"
 #include "ddl/dynamics/mask_fusion.h"
 #include "ddl/dynamics/picture_veto.h"
 #include "ddl/segmentation/upright.h"
@@ -44,6 +45,7 @@ void DynamicConfig::validate() const {
   if (enabled && free_space.enabled) free_space.validate();
   if (enabled && use_segmentation && depth_trim.enabled) depth_trim.validate();
   if (enabled && use_segmentation && picture_veto.enabled) picture_veto.validate();
+  if (enabled && edge_refinement.enabled) edge_refinement.validate();
 }
 
 DynamicFrontEnd::DynamicFrontEnd(const DynamicConfig& config, const camera::PinholeCamera& camera,
@@ -232,7 +234,8 @@ void DynamicFrontEnd::remember_cnn_mask(const io::RgbdFrame& frame, const SE3& T
   memory_.remember(frame.index, T_w_c, mask, frame.depth_m, frame.rgb);
 }
 
-void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
+void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& bgr,
+                                   const cv::Mat& cnn_exclusion,
                                    const cv::Mat& moved_exclusion) const {
   // The sources' regions that the free-space votes saw as static surface are left out of the
   // combined mask; tracking has already dropped their features (the CNN's before the low-cost
@@ -251,6 +254,12 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclu
   masks.combined = dynamics::combine_masks(
       dynamics::combine_masks(masks.cnn_kept, judged(masks.geometry, f.judge_geometry)),
       dynamics::combine_masks(judged(masks.memory, true), masks.free_space));
+  masks.refinement_ms = 0.0;
+  if (config_.edge_refinement.enabled && !masks.combined.empty() && !bgr.empty()) {
+    const Stopwatch watch;
+    masks.combined = dynamics::refine_mask_edges(masks.combined, bgr, config_.edge_refinement);
+    masks.refinement_ms = watch.elapsed_ms();
+  }
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }
 

@@ -20,6 +20,7 @@
 #include "ddl/dynamics/dynamic_memory.h"
 #include "ddl/dynamics/free_space_check.h"
 #include "ddl/dynamics/geometry_check.h"
+#include "ddl/dynamics/mask_edge_refinement.h"
 #include "ddl/io/rgbd_frame.h"
 #include "ddl/map/keyframe.h"
 #include "ddl/map/map_file.h"
@@ -66,6 +67,7 @@ struct DynamicMasks {
   dynamics::FreeSpaceStats free_space_stats;
   double segmentation_ms = 0.0;
   double geometry_ms = 0.0;
+  double refinement_ms = 0.0;  // dynamic.edge_refinement of the combined mask
 };
 
 class DynamicFrontEnd {
@@ -153,8 +155,10 @@ class DynamicFrontEnd {
   /// The combined mask (DynamicMasks::combined: the union of the four sources, the regions the
   /// free-space votes saw as static left out), and the exclusion mask as the union of the
   /// CNN exclusion and `moved_exclusion` (the geometry and memory masks grown by the border;
-  /// dilation distributes over union, so this is the union grown by the border).
-  void finish_masks(DynamicMasks& masks, const cv::Mat& cnn_exclusion,
+  /// dilation distributes over union, so this is the union grown by the border). With
+  /// dynamic.edge_refinement the combined mask is then snapped to the colour edges of `bgr` (the
+  /// frame's image; empty = not refined); the exclusion mask is not.
+  void finish_masks(DynamicMasks& masks, const cv::Mat& bgr, const cv::Mat& cnn_exclusion,
                     const cv::Mat& moved_exclusion) const;
 
   /// Keeps the keyframe's depth image for later multi-view checks (bounded cache).

@@ -358,7 +358,8 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
   tracking::Frame current = tracker_->prepare_frame(input, cnn_exclusion);
   if (dynamic_->enabled()) {
     const cv::Mat geometry_exclusion = remove_moving_features(frame, current, masks);
-    dynamic_->finish_masks(masks, cnn_exclusion, geometry_exclusion);
+    dynamic_->finish_masks(masks, frame.rgb, cnn_exclusion, geometry_exclusion);
+    timings_.record("edge_refinement", masks.refinement_ms);
   }
 
   tracking::MappingStatus status;
@@ -395,7 +396,7 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
       masks.free_space.release();
       masks.free_space_regions.release();
       masks.free_space_votes = {};
-      dynamic_->finish_masks(masks, cnn_exclusion, cv::Mat());
+      dynamic_->finish_masks(masks, frame.rgb, cnn_exclusion, cv::Mat());
     }
   }
 

@@ -10,6 +10,7 @@
 #include "ddl/dynamics/free_space_check.h"
 #include "ddl/dynamics/geometry_check.h"
 #include "ddl/dynamics/mask_depth_trim.h"
+#include "ddl/dynamics/mask_edge_refinement.h"
 #include "ddl/dynamics/picture_veto.h"
 #include "ddl/loop/loop_closer.h"
 #include "ddl/mapping/local_mapper.h"
@@ -52,6 +53,7 @@ struct DynamicConfig {
   dynamics::GeometryCheckConfig geometry;
   dynamics::DynamicMemoryConfig memory;  // CNN detections of recent frames, re-projected
   dynamics::FreeSpaceConfig free_space;  // the frame's points against many earlier keyframes
+  dynamics::EdgeRefinementConfig edge_refinement;  // the combined mask snapped to colour edges
 
   /// Whether keyframe depth images are kept (dynamic.keyframe_depth_cache): the references of the
   /// geometry check and the views of the free-space check.
