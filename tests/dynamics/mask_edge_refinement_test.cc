@@ -114,3 +114,29 @@ TEST(MaskEdgeRefinement, BadSettingsAreRejectedByName) {
 
 }  // namespace
 }  // namespace ddl::dynamics
+
+namespace ddl::dynamics {
+namespace {
+
+// A box of the wall's colour with a dark logo printed on it (syn_desk_person's moved box): the
+// outline gives the filter no edge, the logo a strong one, and the refined mask shrinks towards
+// the logo. keep_core_px keeps the mask's inside.
+TEST(MaskEdgeRefinement, KeepCoreHoldsTheInsideOfAnObjectWithoutAnOutline) {
+  cv::Mat bgr(480, 640, CV_8UC3, cv::Scalar(150, 170, 190));
+  const cv::Rect box(280, 200, 60, 44);
+  cv::rectangle(bgr, cv::Rect(295, 214, 30, 10), cv::Scalar(30, 30, 30), cv::FILLED);
+  cv::Mat mask = cv::Mat::zeros(480, 640, CV_8UC1);
+  mask(box).setTo(255);
+  EdgeRefinementConfig config;
+  const double recall_free = score_mask(refine_mask_edges(mask, bgr, config), mask).recall;
+  config.keep_core_px = 4;
+  const cv::Mat kept = refine_mask_edges(mask, bgr, config);
+  cv::Mat core;
+  cv::erode(mask, core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(9, 9)));
+  EXPECT_EQ(cv::countNonZero(core & ~kept), 0);
+  EXPECT_LT(recall_free, 0.85);  // 0.76: the mask shrank towards the logo
+  EXPECT_GT(score_mask(kept, mask).recall, recall_free + 0.03);  // 0.81
+}
+
+}  // namespace
+}  // namespace ddl::dynamics

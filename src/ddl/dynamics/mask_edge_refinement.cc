@@ -19,6 +19,7 @@ void EdgeRefinementConfig::validate() const {
   if (!(eps > 0 && eps <= 1)) fail("eps", "must be in (0, 1]");
   if (!(threshold > 0 && threshold < 1)) fail("threshold", "must be in (0, 1)");
   if (follow_up_passes < 0 || follow_up_passes > 10) fail("follow_up_passes", "must be in 0..10");
+  if (keep_core_px < 0 || keep_core_px > 64) fail("keep_core_px", "must be in 0..64");
   if (follow_up_radius_px < 1 || follow_up_radius_px > 64) {
     fail("follow_up_radius_px", "must be in 1..64");
   }
@@ -66,6 +67,12 @@ cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
   cv::resize(filtered, full, roi.size(), 0, 0, cv::INTER_LINEAR);
   cv::Mat out = cv::Mat::zeros(mask.size(), CV_8UC1);
   out(roi).setTo(255, full > config.threshold);
+  if (config.keep_core_px > 0) {
+    const int k = 2 * config.keep_core_px + 1;
+    cv::Mat core;
+    cv::erode(mask, core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    out.setTo(255, core);
+  }
   return out;
 }
 
