@@ -36,7 +36,7 @@ cv::Mat shifted(const cv::Mat& mask, int dx, int dy) {
 
 TEST(MaskEdgeRefinement, AMaskOffTheOutlineIsPulledOntoIt) {
   const Scene scene;
-  // What the sources give: the outline missed by a few pixels (shifted, and short at the top).
+  // What the sources give: the outline missed by a few pixels (the mask shifted off it).
   cv::Mat mask = shifted(scene.person, 7, 5);
   const cv::Mat before = mask.clone();
   const cv::Mat refined = refine_mask_edges(mask, scene.bgr, EdgeRefinementConfig{});
@@ -110,6 +110,12 @@ TEST(MaskEdgeRefinement, BadSettingsAreRejectedByName) {
   config = {};
   config.follow_up_passes = -1;
   EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "follow_up_passes"));
+  config = {};
+  config.follow_up_radius_px = 0;
+  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "follow_up_radius_px"));
+  config = {};
+  config.keep_core_px = -1;
+  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "keep_core_px"));
 }
 
 }  // namespace

@@ -33,9 +33,14 @@ cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
   if (box.empty()) return mask;
   // Each pass sets pixels only within twice its radius of the mask it starts from (a pixel's
   // output averages the coefficients of the windows around it, which see mask pixels only that
-  // far), so on the box grown by all passes' reach the result is that of the whole image.
+  // far), so the box grown by all passes' reach cuts off nothing a pass on the whole image would
+  // set (the reach is counted at full resolution from the unrounded radii: at the default scale
+  // it covers the rounded ones). The resampling grid starts at the box's corner, so the rim may
+  // differ from a run on the whole image by about one filter pixel (1 / scale px).
+  // keep_core_px: the erosion below sees the same neighbours in the ROI as in the whole image.
   const int reach =
-      2 * (config.radius_px + config.follow_up_passes * config.follow_up_radius_px) + 2;
+      std::max(2 * (config.radius_px + config.follow_up_passes * config.follow_up_radius_px) + 2,
+               config.keep_core_px + 1);
   const cv::Rect roi =
       cv::Rect(box.x - reach, box.y - reach, box.width + 2 * reach, box.height + 2 * reach) &
       cv::Rect(0, 0, mask.cols, mask.rows);
@@ -68,10 +73,12 @@ cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
   cv::Mat out = cv::Mat::zeros(mask.size(), CV_8UC1);
   out(roi).setTo(255, full > config.threshold);
   if (config.keep_core_px > 0) {
+    // The ROI holds the mask with a margin wider than keep_core_px, or ends at the image border
+    // as the whole image does: eroding the ROI is eroding the whole mask.
     const int k = 2 * config.keep_core_px + 1;
     cv::Mat core;
-    cv::erode(mask, core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
-    out.setTo(255, core);
+    cv::erode(mask(roi), core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+    out(roi).setTo(255, core);
   }
   return out;
 }

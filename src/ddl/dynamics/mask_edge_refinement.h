@@ -8,8 +8,9 @@
 // colour image as guide turns the binary mask into a soft one that follows the guide's edges
 // within radius_px of the mask; thresholding it gives the refined mask, which passes with a
 // smaller window refine further (iterated guided filtering). The passes run at `scale` of the
-// image, thresholded there, on the mask's bounding box grown by the reach of all passes, which is
-// exact: pixels farther from the mask come out 0 either way. Where the guide has no edge a pass is
+// image, thresholded there, on the mask's bounding box grown by the reach of all passes: pixels
+// farther from the mask come out 0 either way (the rim may move by about one filter pixel with
+// the box, whose corner the resampling grid starts at). Where the guide has no edge a pass is
 // a blur, so the rim leans outward by a few pixels (threshold below 0.5), corners round off, and a
 // region narrower than the window on a patch of one colour fades out (CNN fragments on a wall, but
 // also a person's sliver the border cuts if it matches the background). docs/dynamics.md, "Edge
@@ -24,7 +25,7 @@ struct EdgeRefinementConfig {
   bool enabled = true;  // false = the combined mask as its sources give it
   /// Image scale the filter runs at (the mask and the guide area-resampled; the passes are
   /// thresholded at this scale). 0.375 scored as 0.5 on the composite (four starts, to the third
-  /// decimal) at 3.2 against 6.0 ms per frame; 1.0 costs about four times 0.5.
+  /// decimal) at 3.2 against 5.9 ms per frame; 1.0 costs about four times 0.5.
   double scale = 0.375;
   /// Window radius of the first pass at full resolution (pixels). Larger radii snap farther but
   /// round off small objects and cut into people whose colours match what is behind them (offline,

@@ -254,11 +254,13 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& bgr,
   masks.combined = dynamics::combine_masks(
       dynamics::combine_masks(masks.cnn_kept, judged(masks.geometry, f.judge_geometry)),
       dynamics::combine_masks(judged(masks.memory, true), masks.free_space));
+  masks.refined = false;
   masks.refinement_ms = 0.0;
   if (config_.edge_refinement.enabled && !masks.combined.empty() && !bgr.empty()) {
     const Stopwatch watch;
     masks.combined = dynamics::refine_mask_edges(masks.combined, bgr, config_.edge_refinement);
     masks.refinement_ms = watch.elapsed_ms();
+    masks.refined = true;
   }
   masks.exclusion = dynamics::combine_masks(cnn_exclusion, moved_exclusion);
 }

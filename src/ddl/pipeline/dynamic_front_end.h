@@ -53,21 +53,25 @@ struct DynamicMasks {
   cv::Mat cnn_kept;
   /// The union of the four, the regions of the CNN and memory masks (and, with
   /// free_space.judge_geometry, of the geometry mask) that the free-space votes saw as static
-  /// left out (empty when all are)
+  /// left out (empty when all are), snapped to the colour edges with dynamic.edge_refinement.
+  /// What the keyframe keeps (the memory's static veto, the geometry check's references, the map
+  /// file), the dense map and the outputs take.
   cv::Mat combined;
   /// The union of the four before the judging: what the keyframe's free-space view counts as
   /// masked. Judged regions would otherwise feed back: dropped in one keyframe, they become its
   /// static votes, and the next judging drops more (a person sitting still vanished).
   cv::Mat flagged;
-  cv::Mat exclusion;  // combined grown by feature_border_px: features there are not used
-                      // (CNN part before ORB extraction, geometry part after the low-cost pose)
+  cv::Mat exclusion;  // the sources' masks (unjudged, unrefined) grown by feature_border_px:
+                      // features there are not used (CNN part before ORB extraction, the
+                      // others after the low-cost pose)
   dynamics::GeometryCheckStats geometry_stats;
   dynamics::DynamicMemoryStats memory_stats;
   dynamics::FreeSpaceVotes free_space_votes;  // empty grids when the check did not run
   dynamics::FreeSpaceStats free_space_stats;
   double segmentation_ms = 0.0;
   double geometry_ms = 0.0;
-  double refinement_ms = 0.0;  // dynamic.edge_refinement of the combined mask
+  bool refined = false;        // the combined mask was refined (dynamic.edge_refinement)
+  double refinement_ms = 0.0;  // how long that took
 };
 
 class DynamicFrontEnd {

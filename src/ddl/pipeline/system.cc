@@ -359,7 +359,7 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
   if (dynamic_->enabled()) {
     const cv::Mat geometry_exclusion = remove_moving_features(frame, current, masks);
     dynamic_->finish_masks(masks, frame.rgb, cnn_exclusion, geometry_exclusion);
-    timings_.record("edge_refinement", masks.refinement_ms);
+    if (masks.refined) timings_.record("edge_refinement", masks.refinement_ms);
   }
 
   tracking::MappingStatus status;
@@ -397,6 +397,7 @@ FrameOutcome System::process(const io::RgbdFrame& input, std::optional<CnnMask> 
       masks.free_space_regions.release();
       masks.free_space_votes = {};
       dynamic_->finish_masks(masks, frame.rgb, cnn_exclusion, cv::Mat());
+      if (masks.refined) timings_.record("edge_refinement", masks.refinement_ms);
     }
   }
 
