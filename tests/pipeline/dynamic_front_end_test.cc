@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 
 #include "ddl/core/error.h"
@@ -283,6 +284,32 @@ TEST(DynamicFrontEndModel, AFrameIsTurnedUprightOnlyWhenAskedAndItsUpIsKnown) {
   const double roll = 5.0 * M_PI / 180.0;
   EXPECT_FALSE(
       front_end.cnn_mask(frame(upright, Vec3d(std::sin(roll), -std::cos(roll), 0))).turned);
+}
+
+// finish_masks refines the combined mask (dynamic.edge_refinement) and, with
+// keep_free_space_regions, keeps the free-space regions the colour edges would take away: a box of
+// the wall's colour with a logo on it, found by the free-space check.
+TEST(DynamicFrontEndRefinement, TheFreeSpaceRegionsCanBeKeptThroughTheRefinement) {
+  DynamicConfig config;
+  config.segmentation.backend = segmentation::Backend::kNone;
+  const camera::PinholeCamera camera = synthetic::tum3_camera();
+  cv::Mat bgr(camera.height, camera.width, CV_8UC3, cv::Scalar(150, 170, 190));
+  cv::rectangle(bgr, cv::Rect(295, 214, 30, 10), cv::Scalar(30, 30, 30), cv::FILLED);
+  cv::Mat box = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+  box(cv::Rect(280, 200, 60, 44)).setTo(255);
+  const auto combined = [&](bool keep) {
+    config.edge_refinement.keep_free_space_regions = keep;
+    const DynamicFrontEnd front_end(config, camera, "");
+    DynamicMasks masks;
+    masks.free_space = box.clone();
+    masks.free_space_regions = box.clone();
+    front_end.finish_masks(masks, bgr, cv::Mat(), cv::Mat());
+    EXPECT_TRUE(masks.refined);
+    return masks.combined;
+  };
+  const cv::Mat refined = combined(false);
+  EXPECT_GT(cv::countNonZero(box & ~refined), 300) << "the refinement left the box whole";
+  EXPECT_EQ(cv::countNonZero(box & ~combined(true)), 0);
 }
 
 }  // namespace

@@ -50,6 +50,13 @@ struct EdgeRefinementConfig {
   /// (desk_person IoU 0.842 / 0.849 / 0.852; the composite 0.718 -> 0.716 with 4 px, the other
   /// sequences within 0.001). 0 = the filter decides everywhere.
   int keep_core_px = 0;
+  /// Whether the free-space check's regions before their growth over the depth (its seeds'
+  /// regions, DynamicMasks::free_space_regions) are kept whatever the filter says: what the
+  /// depth itself shows moved is not left to the colour edges. Applied by DynamicFrontEnd.
+  /// syn_desk_person's box recall 0.646 (0.621 unrefined, 0.525 refined), desk_person IoU 0.857,
+  /// sitting_halfsphere's box 0.741 (0.723), but the composite 0.711 / 0.724 / 0.697 / 0.697
+  /// from start frames 0-3 (0.718 / 0.731 / 0.704 / 0.702 without): off by default.
+  bool keep_free_space_regions = false;
 
   /// Throws ddl::ConfigError naming "dynamic.edge_refinement.<field>".
   void validate() const;
