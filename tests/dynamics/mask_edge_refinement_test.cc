@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "config_error_check.h"
 #include "ddl/dynamics/mask_fusion.h"
@@ -92,37 +93,22 @@ TEST(MaskEdgeRefinement, MasksAtTheImageBorderAndEmptyMasks) {
 }
 
 TEST(MaskEdgeRefinement, BadSettingsAreRejectedByName) {
-  using test_support::throws_config_error_naming;
-  EdgeRefinementConfig config;
-  EXPECT_NO_THROW(config.validate());
-  config.scale = 0.0;
-  EXPECT_TRUE(
-      throws_config_error_naming([&] { config.validate(); }, "dynamic.edge_refinement.scale"));
-  config = {};
-  config.radius_px = 0;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "radius_px"));
-  config = {};
-  config.eps = -1.0;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "eps"));
-  config = {};
-  config.threshold = 1.0;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "threshold"));
-  config = {};
-  config.follow_up_passes = -1;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "follow_up_passes"));
-  config = {};
-  config.follow_up_radius_px = 0;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "follow_up_radius_px"));
-  config = {};
-  config.keep_core_px = -1;
-  EXPECT_TRUE(throws_config_error_naming([&] { config.validate(); }, "keep_core_px"));
+  EXPECT_NO_THROW(EdgeRefinementConfig{}.validate());
+  // One bad value at a time, on the defaults: the error names the key.
+  const auto rejects = [](auto set, const std::string& key) {
+    EdgeRefinementConfig config;
+    set(config);
+    return test_support::throws_config_error_naming([&] { config.validate(); }, key);
+  };
+  using C = EdgeRefinementConfig;
+  EXPECT_TRUE(rejects([](C& c) { c.scale = 0.0; }, "dynamic.edge_refinement.scale"));
+  EXPECT_TRUE(rejects([](C& c) { c.radius_px = 0; }, "radius_px"));
+  EXPECT_TRUE(rejects([](C& c) { c.eps = -1.0; }, "eps"));
+  EXPECT_TRUE(rejects([](C& c) { c.threshold = 1.0; }, "threshold"));
+  EXPECT_TRUE(rejects([](C& c) { c.follow_up_passes = -1; }, "follow_up_passes"));
+  EXPECT_TRUE(rejects([](C& c) { c.follow_up_radius_px = 0; }, "follow_up_radius_px"));
+  EXPECT_TRUE(rejects([](C& c) { c.keep_core_px = -1; }, "keep_core_px"));
 }
-
-}  // namespace
-}  // namespace ddl::dynamics
-
-namespace ddl::dynamics {
-namespace {
 
 // A box of the wall's colour with a dark logo printed on it (syn_desk_person's moved box): the
 // outline gives the filter no edge, the logo a strong one, and the refined mask shrinks towards

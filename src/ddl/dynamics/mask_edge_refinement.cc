@@ -26,9 +26,10 @@ void EdgeRefinementConfig::validate() const {
 }
 
 cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
-                          const EdgeRefinementConfig& config) {
+                          const EdgeRefinementConfig& config, const cv::Mat& keep) {
   if (mask.empty()) return mask;
   CV_Assert(mask.type() == CV_8UC1 && bgr.type() == CV_8UC3 && mask.size() == bgr.size());
+  CV_Assert(keep.empty() || (keep.type() == CV_8UC1 && keep.size() == mask.size()));
   const cv::Rect box = cv::boundingRect(mask);
   if (box.empty()) return mask;
   // Each pass sets pixels only within twice its radius of the mask it starts from (a pixel's
@@ -80,6 +81,7 @@ cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
     cv::erode(mask(roi), core, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
     out(roi).setTo(255, core);
   }
+  if (!keep.empty()) out.setTo(255, keep);
   return out;
 }
 

@@ -52,7 +52,8 @@ struct EdgeRefinementConfig {
   int keep_core_px = 0;
   /// Whether the free-space check's regions before their growth over the depth (its seeds'
   /// regions, DynamicMasks::free_space_regions) are kept whatever the filter says: what the
-  /// depth itself shows moved is not left to the colour edges. Applied by DynamicFrontEnd.
+  /// depth itself shows moved is not left to the colour edges (DynamicFrontEnd passes them to
+  /// refine_mask_edges as `keep`).
   /// syn_desk_person's box recall 0.646 (0.621 unrefined, 0.525 refined), desk_person IoU 0.857,
   /// sitting_halfsphere's box 0.741 (0.723), but the composite 0.711 / 0.724 / 0.697 / 0.697
   /// from start frames 0-3 (0.718 / 0.731 / 0.704 / 0.702 without): off by default.
@@ -63,9 +64,10 @@ struct EdgeRefinementConfig {
 };
 
 /// `mask` (CV_8UC1, non-zero = dynamic) snapped to the edges of `bgr` (CV_8UC3, the same size)
-/// as described above; 0/255. An empty mask or one with no pixel set is returned as it is.
-/// Returns a new buffer otherwise; `mask` is not changed.
+/// as described above; 0/255. The pixels of `keep` (CV_8UC1 within `mask`, optional) and, with
+/// keep_core_px, the mask's core stay set whatever the filter says. An empty mask or one with no
+/// pixel set is returned as it is. Returns a new buffer otherwise; `mask` is not changed.
 cv::Mat refine_mask_edges(const cv::Mat& mask, const cv::Mat& bgr,
-                          const EdgeRefinementConfig& config);
+                          const EdgeRefinementConfig& config, const cv::Mat& keep = cv::Mat());
 
 }  // namespace ddl::dynamics

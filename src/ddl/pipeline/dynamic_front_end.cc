@@ -258,10 +258,10 @@ void DynamicFrontEnd::finish_masks(DynamicMasks& masks, const cv::Mat& bgr,
   masks.refinement_ms = 0.0;
   if (config_.edge_refinement.enabled && !masks.combined.empty() && !bgr.empty()) {
     const Stopwatch watch;
-    masks.combined = dynamics::refine_mask_edges(masks.combined, bgr, config_.edge_refinement);
-    if (config_.edge_refinement.keep_free_space_regions && !masks.free_space_regions.empty()) {
-      masks.combined.setTo(255, masks.free_space_regions);
-    }
+    const dynamics::EdgeRefinementConfig& refinement = config_.edge_refinement;
+    masks.combined = dynamics::refine_mask_edges(
+        masks.combined, bgr, refinement,
+        refinement.keep_free_space_regions ? masks.free_space_regions : cv::Mat());
     masks.refinement_ms = watch.elapsed_ms();
     masks.refined = true;
   }
